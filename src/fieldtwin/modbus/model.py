@@ -1,0 +1,126 @@
+"""The contract between the Modbus slave core and a device behind it.
+
+The core (``fieldtwin.modbus``) decodes frames into the typed requests below,
+keeps the framing rules, and asks the device to execute them.  The device (a
+TES) owns its memory map, its diagnostic counters and its answer delay.
+Nothing here does I/O or reads a clock: ``now`` is simulated microseconds.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+from typing import Protocol
+
+
+class ExceptionCode(enum.IntEnum):
+    ILLEGAL_FUNCTION = 1
+    ILLEGAL_DATA_ADDRESS = 2
+    ILLEGAL_DATA_VALUE = 3
+    SLAVE_DEVICE_FAILURE = 4
+    ACKNOWLEDGE = 5
+    SLAVE_DEVICE_BUSY = 6
+
+
+class Link(enum.Enum):
+    """Which physical link a frame came in on (the TES count each separately)."""
+
+    RS485 = "rs485"
+    RS232 = "rs232"
+    TCP = "tcp"
+
+
+class Counter(enum.Enum):
+    """Diagnostic counters the core reports to the device (TES manual section 7)."""
+
+    EXCEPTION_REPLIES = "exception_replies"
+    NOT_READY_REPLIES = "not_ready_replies"
+    FRAMES_EXECUTED = "frames_executed"
+    CRC_ERRORS = "crc_errors"
+    WRONG_CHARACTERS = "wrong_characters"
+    GOOD_FRAMES = "good_frames"
+    NO_SILENCE = "no_silence"
+
+
+@dataclass(frozen=True, slots=True)
+class ReadBits:
+    """fc 01 (output bits) or 02 (input bits)."""
+
+    function: int
+    address: int
+    count: int
+
+
+@dataclass(frozen=True, slots=True)
+class ReadWords:
+    """fc 03 (holding) or 04 (input)."""
+
+    function: int
+    address: int
+    count: int
+
+
+@dataclass(frozen=True, slots=True)
+class WriteBit:
+    """fc 05."""
+
+    address: int
+    value: bool
+
+
+@dataclass(frozen=True, slots=True)
+class WriteWord:
+    """fc 06."""
+
+    address: int
+    value: int
+
+
+@dataclass(frozen=True, slots=True)
+class WriteBits:
+    """fc 0F."""
+
+    address: int
+    values: tuple[bool, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class WriteWords:
+    """fc 10."""
+
+    address: int
+    values: tuple[int, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class ReadExceptionStatus:
+    """fc 07."""
+
+
+Request = ReadBits | ReadWords | WriteBit | WriteWord | WriteBits | WriteWords | ReadExceptionStatus
+
+# What a device answers: bits for ReadBits, words for ReadWords, an int (the
+# 8-bit status) for ReadExceptionStatus, None for a write that succeeded, or an
+# ExceptionCode.
+Result = tuple[bool, ...] | tuple[int, ...] | int | None | ExceptionCode
+
+
+class SlaveDevice(Protocol):
+    """A Modbus slave's behaviour, as the core sees it."""
+
+    @property
+    def slave(self) -> int:
+        """Slave number 1..247 this device answers to."""
+        ...
+
+    def execute(self, request: Request, link: Link, now: int, broadcast: bool) -> Result:
+        """Carry out a decoded request.  ``broadcast`` requests get no reply."""
+        ...
+
+    def count(self, link: Link, counter: Counter, now: int) -> None:
+        """The core saw one more of ``counter`` on ``link``."""
+        ...
+
+    def answer_delay(self, link: Link) -> int:
+        """Microseconds to wait before replying (TES answer delay, 0..2570 ms)."""
+        ...

@@ -1,0 +1,1 @@
+"""The real-time runner: paces the simulated clock and pumps transports."""

@@ -1,0 +1,1 @@
+"""Leroy Automation TES remote I/O terminals."""
