@@ -1,0 +1,579 @@
+"""What every TSX Series 7 intelligent module shares.
+
+The full I/O bus interface (AEM 1.1-1, 2.4): 16 discrete input bits and the
+fault bit Ixy,S, discrete outputs where a module has them, 8 input and 8 output
+register words, and the message interface (Text Blocks).  The operating modes
+(AEM 2.5): initial self-test, Run/Stop following OWxy,0,C, awaiting
+configuration, the message-system reset OWxy,0,2.  Fault processing (AEM 4.4-1):
+bits IWxy,0,4/6/7 memorised until the fault bit string is read, IWxy,0,8 and
+IWxy,0,A live, the LEDs OK / ERR / F.  The requests every module shares
+(AEM 4.4-2, SCM 6.3): H'0F' version, H'49'/H'4A' application name, H'47' fault
+bit string.
+
+A module is a sans-IO core: it never sleeps or reads a clock; time comes from
+the SimClock it is given, and the PLC drives the bus by calling
+:meth:`IntelligentModule.bus_write` / :meth:`IntelligentModule.bus_read`.
+"""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, ClassVar
+
+from fieldtwin.clock import Handle as ClockHandle
+from fieldtwin.clock import S, SimClock
+from fieldtwin.errors import ConfigError, ProtocolError
+from fieldtwin.tsx.textblock import (
+    ERR_CANCELLED,
+    ERR_MODULE_FAULT,
+    ERR_PARAMETER,
+    ERR_POWER_BREAK,
+    MODULE_SYSTEM,
+    V_ERROR,
+    V_OK_WRITE,
+    Answer,
+    Exchange,
+    Request,
+)
+from fieldtwin.words import get_bit, set_bit
+
+# IWxy,0 standard status word (AEM 4.4-1 and the quick reference)
+ST_RESET_DONE = 0x2  # ongoing exchange cancelled, follows OWxy,0,2
+ST_READY = 0x3  # module available: self-test complete
+ST_GENERAL_FAULT = 0x4  # memorised: OR of bits 6 and 7
+ST_MODULE_FAULT = 0x6  # memorised: acquisition/conversion (module) fault
+ST_APPLICATION_FAULT = 0x7  # memorised: application fault (sensors, wiring)
+ST_BLOCKING_FAULT = 0x8  # blocking fault (module failure)
+ST_SELF_TEST = 0x9  # initial self-test in progress
+ST_TERMINAL_BLOCK = 0xA  # terminal block open or not fitted
+ST_AWAITING_CONFIG = 0xB  # waiting for a configuration
+ST_RUN = 0xC  # module Run (0 = Stop)
+
+# OWxy,0 standard command word
+CMD_RESET_EXCHANGE = 0x2  # message-system reset
+CMD_RUN = 0xC  # module Run/Stop
+
+# Requests every module shares (AEM 4.4-2, SCM 6.3)
+REQ_VERSION = 0x0F
+REQ_FAULT_STRING = 0x47
+REQ_WRITE_APP_NAME = 0x49
+REQ_READ_APP_NAME = 0x4A
+V_VERSION = 0x3F
+V_FAULT_STRING = 0x77
+V_APP_NAME = 0x7A
+APP_NAME_MAX = 20
+VERSION_LENGTH = 27
+
+
+class FaultCategory(enum.Enum):
+    """Where a fault shows in IWxy,0 (AEM 4.4-1)."""
+
+    BLOCKING = "blocking"  # IWxy,0,8, F LED, module out of service
+    MODULE = "module"  # IWxy,0,6 (memorised) and 4, Ixy,S, module to Stop
+    APPLICATION = "application"  # IWxy,0,7 (memorised) and 4, ERR LED, module keeps running
+
+
+class ModuleState(enum.Enum):
+    OFF = "off"  # no power: PLC off, or module out of its slot
+    SELF_TEST = "self-test"
+    OPERATIONAL = "operational"  # Run or Stop, see IWxy,0,C
+    BLOCKED = "blocked"  # blocking fault: out of service until power-up
+
+
+class ModuleEvent(enum.Enum):
+    POWER_ON = "power on"
+    SELF_TEST_DONE = "self-test done"
+    BLOCKING_FAULT = "blocking fault"
+    POWER_OFF = "power off"
+
+
+@dataclass(frozen=True, slots=True)
+class Leds:
+    """The front-panel LEDs as readable state."""
+
+    ok: bool
+    err: bool
+    f: bool
+
+    def __str__(self) -> str:
+        return " ".join(f"{n}={'on' if v else 'off'}" for n, v in self._asdict().items())
+
+    def _asdict(self) -> dict[str, bool]:
+        return {"OK": self.ok, "ERR": self.err, "F": self.f}
+
+
+@dataclass(frozen=True, slots=True)
+class BusImage:
+    """What the PLC reads from a slot at a bus refresh."""
+
+    iw: tuple[int, ...]
+    i_bits: int
+    fault: bool  # Ixy,S
+
+
+@dataclass(frozen=True, slots=True)
+class ModuleContext:
+    """What the PLC gives a module it inserts."""
+
+    clock: SimClock
+    plc_model: str = "TSX 87"
+    # Returns the PLC's fieldtwin.runtime.runner.Runner, creating it: call it when the
+    # module wires a real endpoint (pty, serial, TCP), so that simulated time follows
+    # the wall clock, also inside plc.advance and plc.exchange (SCM issue).
+    pace: Callable[[], Any] | None = None
+
+
+@dataclass(slots=True)
+class _Latch:
+    """One fault of the fault bit string and its acknowledgement (AEM 4.4-1)."""
+
+    category: FaultCategory
+    active: bool = False
+    latched: bool = False  # shown in IWxy,0 until acknowledged and gone
+    acknowledged: bool = False
+
+
+class IntelligentModule:
+    """Base of every intelligent module twin; subclasses add their function."""
+
+    type_name: ClassVar[str] = "intelligent module"
+    # Codes a slot may be declared with (hardware code on TSX 47-30/67/87, software
+    # code on a TSX 47-20); another code sets Ixy,S (AEM 4.4-1).
+    hardware_codes: ClassVar[frozenset[int]] = frozenset()
+    software_codes: ClassVar[frozenset[int]] = frozenset()
+    self_test_us: ClassVar[int] = 10 * S
+    fault_string_bytes: ClassVar[int] = 8
+    version_text: ClassVar[str] = "INTELLIGENT MODULE V1.0"
+    has_run_stop: ClassVar[bool] = True  # OWxy,0,C drives IWxy,0,C
+    discrete_outputs: ClassVar[int] = 0  # Oxy,0.. a module has
+    # which terminal-block fault bit of the fault string drives IWxy,0,A (None: none)
+    terminal_block_fault_bit: ClassVar[int | None] = None
+
+    def __init__(
+        self, ctx: ModuleContext, rack: int, slot: int, *, declared_code: int | None = None
+    ) -> None:
+        self.ctx = ctx
+        self.clock = ctx.clock
+        self.rack = rack
+        self.slot = slot
+        self.declared_code = declared_code
+        self.state = ModuleState.OFF
+        self.iw = [0] * 8  # written by the module, read by the PLC
+        self.ow = [0] * 8  # written by the PLC
+        self.i_bits = 0
+        self.o_bits = 0
+        self.awaiting_configuration = False
+        self.app_name = b""
+        self._faults: dict[int, _Latch] = {}
+        self._exchanges: dict[int, Exchange] = {}
+        self._handles: list[ClockHandle] = []
+        self._hardware_faults: set[int] = set()  # found by the next initial self-test
+
+    # --- identity ---------------------------------------------------------
+
+    @property
+    def address(self) -> str:
+        return f"{self.slot}" if self.rack == 0 else f"{self.rack}{self.slot}"
+
+    @property
+    def code_ok(self) -> bool:
+        if self.declared_code is None:
+            return True
+        codes = self.software_codes if self.ctx.plc_model == "TSX 47-20" else self.hardware_codes
+        return not codes or self.declared_code in codes
+
+    # --- scheduling that power-off cancels -------------------------------
+
+    def call_later(self, delay: int, callback: Callable[[int], None]) -> ClockHandle:
+        handle = self.clock.call_later(delay, callback)
+        self._handles = [h for h in self._handles if h.active]
+        self._handles.append(handle)
+        return handle
+
+    def call_at(self, at: int, callback: Callable[[int], None]) -> ClockHandle:
+        return self.call_later(at - self.clock.now, callback)
+
+    # --- the operating-mode machine (DESIGN rule 4) ------------------------
+
+    _TRANSITIONS: ClassVar[dict[tuple[ModuleState, ModuleEvent], tuple[str, ModuleState]]] = {
+        (ModuleState.OFF, ModuleEvent.POWER_ON): ("_start_self_test", ModuleState.SELF_TEST),
+        (ModuleState.OFF, ModuleEvent.POWER_OFF): ("_noop", ModuleState.OFF),
+        (ModuleState.SELF_TEST, ModuleEvent.SELF_TEST_DONE): (
+            "_end_self_test",
+            ModuleState.OPERATIONAL,
+        ),
+        (ModuleState.SELF_TEST, ModuleEvent.BLOCKING_FAULT): ("_block", ModuleState.BLOCKED),
+        (ModuleState.SELF_TEST, ModuleEvent.POWER_OFF): ("_power_down", ModuleState.OFF),
+        (ModuleState.OPERATIONAL, ModuleEvent.BLOCKING_FAULT): ("_block", ModuleState.BLOCKED),
+        (ModuleState.OPERATIONAL, ModuleEvent.POWER_OFF): ("_power_down", ModuleState.OFF),
+        (ModuleState.BLOCKED, ModuleEvent.BLOCKING_FAULT): ("_noop", ModuleState.BLOCKED),
+        (ModuleState.BLOCKED, ModuleEvent.POWER_OFF): ("_power_down", ModuleState.OFF),
+    }
+
+    def _fire(self, event: ModuleEvent, now: int) -> None:
+        try:
+            action, target = self._TRANSITIONS[(self.state, event)]
+        except KeyError:
+            raise ProtocolError(
+                f"{self.type_name} in slot {self.address}: can't handle {event.value!r}"
+                f" in state {self.state.value}"
+            ) from None
+        self.state = target
+        getattr(self, action)(now)
+        self.refresh_status()
+
+    def _noop(self, now: int) -> None:
+        pass
+
+    def power_on(self, now: int | None = None) -> None:
+        """Power-up, power return after a long break, or insertion under power."""
+        self._fire(ModuleEvent.POWER_ON, self.clock.now if now is None else now)
+
+    def power_off(self, now: int | None = None) -> None:
+        """Power removed, or module pulled out of its slot."""
+        self._fire(ModuleEvent.POWER_OFF, self.clock.now if now is None else now)
+
+    def _start_self_test(self, now: int) -> None:
+        # AEM 7.1-1: ERR and OK lit, IWxy,0,9 = 1, measurements not valid
+        self.iw = [0] * 8
+        self.i_bits = 0
+        self._faults.clear()
+        self.awaiting_configuration = False
+        self.on_power_on(now)
+        self.call_later(self.self_test_us, self._self_test_over)
+
+    def _self_test_over(self, now: int) -> None:
+        if any(
+            self._fault_category(bit) is FaultCategory.BLOCKING for bit in self._hardware_faults
+        ):
+            for bit in self._hardware_faults:
+                self._set_latch(bit, True, self._fault_category(bit))
+            self._fire(ModuleEvent.BLOCKING_FAULT, now)
+            return
+        self._fire(ModuleEvent.SELF_TEST_DONE, now)
+
+    def _end_self_test(self, now: int) -> None:
+        # Faults found by the initial self-test (AEM 7.1-1) are raised now.
+        for bit in sorted(self._hardware_faults):
+            self._set_latch(bit, True, self._fault_category(bit))
+        self.on_self_test_done(now)
+        for exchange in list(self._exchanges.values()):
+            if not exchange.done:
+                self._dispatch(exchange, now)
+
+    def _block(self, now: int) -> None:
+        self.on_blocked(now)
+
+    def _power_down(self, now: int) -> None:
+        for handle in self._handles:
+            handle.cancel()
+        self._handles.clear()
+        for exchange in list(self._exchanges.values()):
+            exchange.complete(Answer.fault(ERR_POWER_BREAK), now)
+        self._exchanges.clear()
+        self.iw = [0] * 8
+        self.i_bits = 0
+        self.on_power_off(now)
+
+    # --- hooks for subclasses ---------------------------------------------
+
+    def on_power_on(self, now: int) -> None:
+        """Power-up: reset volatile state (configuration lost on most modules)."""
+
+    def on_self_test_done(self, now: int) -> None:
+        """Self-test passed: start the function (default configuration...)."""
+
+    def on_power_off(self, now: int) -> None:
+        """Power gone: every scheduled event is already cancelled."""
+
+    def on_blocked(self, now: int) -> None:
+        """A blocking fault took the module out of service."""
+
+    def on_run_changed(self, running: bool, now: int) -> None:
+        """IWxy,0,C changed."""
+
+    def on_outputs(self, old_ow: list[int], old_o: int, now: int) -> None:
+        """The PLC wrote new output words/bits (self.ow, self.o_bits)."""
+
+    def run_permitted(self) -> bool:
+        """Beyond OWxy,0,C: may the module run (configuration valid...)?"""
+        return not self.awaiting_configuration
+
+    def handle_request(self, exchange: Exchange, now: int) -> None:
+        """A request the base does not know: answer it with ``exchange.complete``."""
+        exchange.complete(Answer(v=V_ERROR), now)
+
+    def status_details(self) -> dict[str, str]:
+        """Module-specific lines for the console and the live view."""
+        return {}
+
+    def set_input(self, channel: int, *args: Any, **kwargs: Any) -> None:
+        raise ConfigError(f"{self.type_name} has no settable inputs")
+
+    def console_input(self, channel: int, text: str) -> None:
+        """``input SLOT CHANNEL VALUE`` in the console (VALUE as typed)."""
+        raise ConfigError(f"{self.type_name} has no settable inputs")
+
+    def fault_names(self) -> Mapping[str, str]:
+        """Faults the console and plant file can inject: name -> description."""
+        return {}
+
+    def inject_fault(self, name: str, active: bool) -> None:
+        raise ConfigError(
+            f"unknown fault {name!r} for {self.type_name}"
+            f" (allowed: {', '.join(self.fault_names()) or 'none'})"
+        )
+
+    def configure_from_plant(self, table: Mapping[str, Any], where: str, base_dir: Path) -> None:
+        """Extra keys of a ``[[module]]`` table (signals, endpoints, faults)."""
+        if table:
+            raise ConfigError(f"{where}: unknown keys {sorted(table)} for {self.type_name}")
+
+    # --- run / stop --------------------------------------------------------
+
+    @property
+    def running(self) -> bool:
+        return bool(get_bit(self.iw[0], ST_RUN))
+
+    def _compute_run(self) -> bool:
+        if self.state is not ModuleState.OPERATIONAL or not self.code_ok:
+            return False
+        if not self.has_run_stop:
+            return False
+        if any(f.active and f.category is FaultCategory.MODULE for f in self._faults.values()):
+            return False  # AEM 2.5-4: module to Stop until the fault disappears
+        return bool(get_bit(self.ow[0], CMD_RUN)) and self.run_permitted()
+
+    # --- faults (AEM 4.4-1) ------------------------------------------------
+
+    def _fault_category(self, bit: int) -> FaultCategory:
+        latch = self._faults.get(bit)
+        if latch is not None:
+            return latch.category
+        return self.fault_category_of(bit)
+
+    def fault_category_of(self, bit: int) -> FaultCategory:
+        """Category of fault-string bit ``bit`` (subclasses map their layout)."""
+        return FaultCategory.APPLICATION
+
+    def set_fault(self, bit: int, active: bool, category: FaultCategory | None = None) -> None:
+        """Raise or clear fault ``bit`` of the fault bit string."""
+        if not 0 <= bit < 8 * self.fault_string_bytes:
+            raise ConfigError(
+                f"fault bit {bit} out of range (allowed 0..{8 * self.fault_string_bytes - 1})"
+            )
+        cat = category or self._fault_category(bit)
+        if self.state is ModuleState.OFF:
+            return
+        if cat is FaultCategory.BLOCKING and active:
+            self._set_latch(bit, True, cat)
+            if self.state is not ModuleState.BLOCKED:
+                self._fire(ModuleEvent.BLOCKING_FAULT, self.clock.now)
+            return
+        self._set_latch(bit, active, cat)
+        self.refresh_status()
+
+    def _set_latch(self, bit: int, active: bool, category: FaultCategory) -> None:
+        latch = self._faults.get(bit)
+        if latch is None:
+            if not active:
+                return
+            latch = self._faults[bit] = _Latch(category)
+        if active and not latch.active:
+            latch.active = True
+            latch.latched = True
+            latch.acknowledged = False
+        elif not active and latch.active:
+            latch.active = False
+            if latch.acknowledged:
+                latch.latched = False  # read while present: goes when the fault ends
+
+    def fault_active(self, bit: int) -> bool:
+        latch = self._faults.get(bit)
+        return bool(latch and latch.active)
+
+    def hardware_fault(self, bit: int, present: bool = True) -> None:
+        """A fault the next initial self-test will find (and, powered, now)."""
+        if present:
+            self._hardware_faults.add(bit)
+        else:
+            self._hardware_faults.discard(bit)
+        if self.state is not ModuleState.OFF:
+            self.set_fault(bit, present)
+
+    def read_fault_string(self) -> bytes:
+        """The fault bit string; reading it acknowledges the memorised bits."""
+        data = bytearray(self.fault_string_bytes)
+        for bit, latch in self._faults.items():
+            if latch.active or latch.latched:
+                data[bit // 8] |= 1 << (bit % 8)
+        for latch in self._faults.values():
+            if latch.active:
+                latch.acknowledged = True
+            else:
+                latch.latched = False
+        self.refresh_status()
+        return bytes(data)
+
+    def _any(self, category: FaultCategory, *, memorised: bool) -> bool:
+        return any(
+            f.category is category and (f.active or (memorised and f.latched))
+            for f in self._faults.values()
+        )
+
+    @property
+    def module_fault(self) -> bool:
+        """Ixy,S: blocking or module fault, wrong declared code (AEM 4.4-1)."""
+        if self.state is ModuleState.OFF or not self.code_ok:
+            return True
+        if self.state is ModuleState.BLOCKED:
+            return True
+        return self._any(FaultCategory.MODULE, memorised=False)
+
+    def leds(self) -> Leds:
+        """OK / ERR / F (AEM 4.4-1 and 7.1-1)."""
+        if self.state is ModuleState.OFF:
+            return Leds(False, False, False)
+        if self.state is ModuleState.SELF_TEST:
+            return Leds(True, True, False)
+        if self.state is ModuleState.BLOCKED:
+            return Leds(False, False, True)
+        ok = not self._any(FaultCategory.MODULE, memorised=False)
+        return Leds(ok, self._any(FaultCategory.APPLICATION, memorised=False), False)
+
+    # --- status word ---------------------------------------------------------
+
+    def standard_status(self) -> int:
+        word = self.iw[0] & ~0x1FFC & 0xFFFF  # keep bits a subclass owns (0, 1, D..F)
+        if self.state is ModuleState.OFF:
+            return 0
+        module = self._any(FaultCategory.MODULE, memorised=True)
+        application = self._any(FaultCategory.APPLICATION, memorised=True)
+        word = set_bit(word, ST_RESET_DONE, get_bit(self.ow[0], CMD_RESET_EXCHANGE))
+        word = set_bit(word, ST_READY, self.state is ModuleState.OPERATIONAL)
+        word = set_bit(word, ST_MODULE_FAULT, module)
+        word = set_bit(word, ST_APPLICATION_FAULT, application)
+        word = set_bit(word, ST_GENERAL_FAULT, module or application)
+        word = set_bit(word, ST_BLOCKING_FAULT, self.state is ModuleState.BLOCKED)
+        word = set_bit(word, ST_SELF_TEST, self.state is ModuleState.SELF_TEST)
+        tb = self.terminal_block_fault_bit
+        word = set_bit(word, ST_TERMINAL_BLOCK, tb is not None and self.fault_active(tb))
+        word = set_bit(word, ST_AWAITING_CONFIG, self.awaiting_configuration)
+        return set_bit(word, ST_RUN, self._compute_run())
+
+    def refresh_status(self) -> None:
+        """Recompute IWxy,0; call after anything that may change it."""
+        if self.state is ModuleState.OFF:
+            self.iw[0] = 0
+            return
+        was_running = self.running
+        self.iw[0] = self.standard_status()
+        if self.running != was_running:
+            self.on_run_changed(self.running, self.clock.now)
+
+    # --- the bus -------------------------------------------------------------
+
+    def bus_write(self, ow: list[int], o_bits: int, now: int) -> None:
+        """The PLC refreshes the output words and bits."""
+        if self.state is ModuleState.OFF:
+            return
+        old_ow, old_o = self.ow, self.o_bits
+        self.ow, self.o_bits = list(ow), o_bits
+        if not get_bit(old_ow[0], CMD_RESET_EXCHANGE) and get_bit(ow[0], CMD_RESET_EXCHANGE):
+            self.reset_exchanges(now)  # message-system reset, rising edge
+        if old_ow != self.ow or old_o != o_bits:
+            self.on_outputs(old_ow, old_o, now)
+        self.refresh_status()
+
+    def bus_read(self) -> BusImage:
+        return BusImage(tuple(self.iw), self.i_bits, self.module_fault)
+
+    # --- the message interface ---------------------------------------------
+
+    def submit(
+        self, request: Request, now: int, on_done: Callable[[Exchange, int], None]
+    ) -> Exchange:
+        """The PLC validated a Text Block addressed to this module."""
+        exchange = Exchange(request, now, on_done)
+        key = request.channel
+        if self.state in (ModuleState.OFF, ModuleState.BLOCKED) or not self.code_ok:
+            exchange.complete(Answer.fault(ERR_MODULE_FAULT), now)
+            return exchange
+        busy = self._exchanges.get(key)
+        if busy is not None and not busy.done:
+            exchange.complete(Answer.fault(ERR_PARAMETER), now)
+            return exchange
+        self._exchanges[key] = exchange
+        if self.state is not ModuleState.SELF_TEST:  # else held until the self-test ends
+            self._dispatch(exchange, now)
+        return exchange
+
+    def _dispatch(self, exchange: Exchange, now: int) -> None:
+        request = exchange.request
+        common = {
+            REQ_VERSION: self._req_version,
+            REQ_FAULT_STRING: self._req_fault_string,
+            REQ_WRITE_APP_NAME: self._req_write_app_name,
+            REQ_READ_APP_NAME: self._req_read_app_name,
+        }
+        handler = common.get(request.code) if request.channel == MODULE_SYSTEM else None
+        if handler is not None and request.code not in self.overridden_requests():
+            exchange.complete(handler(request), now)
+        else:
+            self.handle_request(exchange, now)
+
+    def overridden_requests(self) -> frozenset[int]:
+        """Common request codes a subclass answers itself in handle_request."""
+        return frozenset()
+
+    def pending_exchange(self, channel: int) -> Exchange | None:
+        exchange = self._exchanges.get(channel)
+        return exchange if exchange is not None and not exchange.done else None
+
+    def reset_exchanges(self, now: int, channel: int | None = None) -> None:
+        """Cancel exchanges in progress (OWxy,0,2, or a channel reset bit)."""
+        for key, exchange in list(self._exchanges.items()):
+            if channel is None or key == channel:
+                self.on_exchange_cancelled(exchange, now)
+                exchange.complete(Answer.fault(ERR_CANCELLED), now)
+
+    def on_exchange_cancelled(self, exchange: Exchange, now: int) -> None:
+        """An exchange is about to be cancelled: stop what it started."""
+
+    def _req_version(self, request: Request) -> Answer:
+        # AEM 4.4-2, SCM 6.3: 27 characters, V = H'3F'
+        text = self.version_text.encode("ascii")[:VERSION_LENGTH].ljust(VERSION_LENGTH, b" ")
+        return Answer(v=V_VERSION, data=text)
+
+    def _req_fault_string(self, request: Request) -> Answer:
+        return Answer(v=V_FAULT_STRING, data=self.read_fault_string())
+
+    def _req_write_app_name(self, request: Request) -> Answer:
+        # AEM 4.4-2, SCM 6.3: 1 to 20 characters, V = H'FE'
+        if not 1 <= len(request.data) <= APP_NAME_MAX:
+            return Answer(v=V_ERROR)
+        self.app_name = request.data
+        return Answer(v=V_OK_WRITE)
+
+    def _req_read_app_name(self, request: Request) -> Answer:
+        # SCM 6.3: "systematically returns 20 characters"
+        return Answer(v=V_APP_NAME, data=self.app_name.ljust(APP_NAME_MAX, b" "))
+
+    # --- status for people -------------------------------------------------
+
+    def status(self) -> dict[str, str]:
+        """Lines for the console ``status`` command and the live view."""
+        lines = {
+            "module": f"{self.type_name} rack {self.rack} slot {self.slot}",
+            "state": self.state.value,
+            "mode": "Run" if self.running else "Stop",
+            "leds": str(self.leds()),
+            "fault (I,S)": str(int(self.module_fault)),
+        }
+        if not self.code_ok:
+            lines["code"] = f"declared code {self.declared_code} is not this module's"
+        lines.update(self.status_details())
+        return lines

@@ -1,0 +1,226 @@
+"""The common part of every intelligent module, through the test double."""
+
+from __future__ import annotations
+
+import pytest
+
+from fieldtwin.errors import ConfigError, ProtocolError
+from fieldtwin.tsx.module import Leds, ModuleEvent, ModuleState
+from fieldtwin.tsx.plc import Plc
+from tests.tsx.double import CONVERTER, DOUBLE, SENSOR, Double
+
+M = 0x0563  # rack 0 slot 5, module system
+
+
+def make(model: str = "TSX 87", code: int | None = None) -> tuple[Plc, Double]:
+    plc = Plc(model=model, scan_ms=10)
+    mod = plc.insert(DOUBLE, rack=0, slot=5 if model != "TSX 47-20" else 3, code=code)
+    return plc, mod
+
+
+def test_initial_self_test_bits_and_leds() -> None:
+    # AEM 7.1-1: during the self-test IWxy,0,9 = 1, ERR and OK lit; then IWxy,0,3 = 1
+    plc, mod = make()
+    plc.advance(0.05)
+    assert plc.read("IW5,0,9") == 1 and plc.read("IW5,0,3") == 0
+    assert mod.leds() == Leds(ok=True, err=True, f=False)
+    plc.advance(2.0)
+    assert plc.read("IW5,0,9") == 0 and plc.read("IW5,0,3") == 1
+    assert mod.leds() == Leds(ok=True, err=False, f=False)
+    assert plc.read("I5,S") == 0
+
+
+def test_run_stop_follows_the_command_bit() -> None:
+    # AEM 2.5-2: OWxy,0,C commands Run/Stop, IWxy,0,C shows it
+    plc, mod = make()
+    plc.advance(2.1)
+    assert plc.read("IW5,0,C") == 0
+    plc.write("OW5,0,C", 1)
+    plc.advance(0.02)
+    assert plc.read("IW5,0,C") == 1 and mod.running
+    plc.write("OW5,0,C", 0)
+    plc.advance(0.02)
+    assert plc.read("IW5,0,C") == 0
+
+
+def test_awaiting_configuration_blocks_run() -> None:
+    plc, mod = make()
+    plc.advance(2.1)
+    mod.awaiting_configuration = True
+    plc.write("OW5,0,C", 1)
+    plc.advance(0.02)
+    assert plc.read("IW5,0,B") == 1 and plc.read("IW5,0,C") == 0
+
+
+def test_application_fault_latches_until_the_fault_string_is_read() -> None:
+    # AEM 4.4-1: IWxy,0,4 and 7 stay at 1 after the fault disappears, until read
+    plc, mod = make()
+    plc.advance(2.1)
+    plc.write("OW5,0,C", 1)
+    mod.inject_fault("sensor", True)
+    plc.advance(0.02)
+    assert (plc.read("IW5,0,4"), plc.read("IW5,0,7")) == (1, 1)
+    assert mod.leds().err and plc.read("I5,S") == 0 and mod.running  # keeps running
+    mod.inject_fault("sensor", False)
+    plc.advance(0.02)
+    assert plc.read("IW5,0,7") == 1 and not mod.leds().err  # memorised, LED live
+    r = plc.exchange(m=M, c=0x47, recv_bytes=8)
+    assert r.v == 0x77 and r.s == 8 and r.data[SENSOR // 8] == 1 << (SENSOR % 8)
+    plc.advance(0.02)
+    assert plc.read("IW5,0,7") == 0 and plc.read("IW5,0,4") == 0
+
+
+def test_fault_read_while_present_clears_when_the_fault_ends() -> None:
+    plc, mod = make()
+    plc.advance(2.1)
+    mod.inject_fault("sensor", True)
+    plc.exchange(m=M, c=0x47, recv_bytes=8)
+    plc.advance(0.02)
+    assert plc.read("IW5,0,7") == 1  # still present
+    mod.inject_fault("sensor", False)
+    plc.advance(0.02)
+    assert plc.read("IW5,0,7") == 0
+
+
+def test_second_fault_not_reported_until_the_first_is_gone() -> None:
+    # AEM 4.4-1: "The message read after detection of fault nbr. 1 will not contain
+    # fault nbr. 2 ... IWxy,0,4 and IWxy,0,i are at 1 until fault nbr. 1 disappears."
+    plc, mod = make()
+    plc.advance(2.1)
+    mod.set_fault(SENSOR, True)
+    first = plc.exchange(m=M, c=0x47, recv_bytes=8)
+    mod.set_fault(SENSOR + 4, True)  # fault 2 while fault 1 is present
+    assert first.data[4] == 0x01
+    mod.set_fault(SENSOR, False)
+    plc.advance(0.02)
+    assert plc.read("IW5,0,7") == 1  # fault 2 not acknowledged yet
+    second = plc.exchange(m=M, c=0x47, recv_bytes=8)
+    assert second.data[4] == 0x10
+    mod.set_fault(SENSOR + 4, False)
+    plc.advance(0.02)
+    assert plc.read("IW5,0,7") == 0
+
+
+def test_module_fault_stops_the_module_and_sets_the_fault_bit() -> None:
+    # AEM 2.5-4: an acquisition/conversion fault stops the module until it disappears
+    plc, mod = make()
+    plc.advance(2.1)
+    plc.write("OW5,0,C", 1)
+    plc.advance(0.02)
+    mod.inject_fault("terminal_block", True)
+    plc.advance(0.02)
+    assert plc.read("IW5,0,C") == 0 and plc.read("I5,S") == 1
+    assert plc.read("IW5,0,A") == 1 and plc.read("IW5,0,6") == 1
+    assert not mod.leds().ok
+    mod.inject_fault("terminal_block", False)
+    plc.advance(0.02)
+    assert plc.read("IW5,0,C") == 1 and plc.read("I5,S") == 0 and plc.read("IW5,0,A") == 0
+    assert plc.read("IW5,0,6") == 1  # memorised until the fault string is read
+
+
+def test_blocking_fault_takes_the_module_out_of_service() -> None:
+    plc, mod = make()
+    plc.advance(2.1)
+    mod.set_fault(0, True)
+    plc.advance(0.02)
+    assert mod.state is ModuleState.BLOCKED
+    assert plc.read("IW5,0,8") == 1 and plc.read("I5,S") == 1
+    assert mod.leds() == Leds(ok=False, err=False, f=True)
+    r = plc.exchange(m=M, c=0x0F, recv_bytes=27)
+    assert r.e and r.s == 4  # module fault
+
+
+def test_hardware_fault_found_by_the_initial_self_test() -> None:
+    plc, mod = make()
+    mod.hardware_fault(CONVERTER)
+    plc.advance(2.1)
+    assert plc.read("IW5,0,6") == 1 and plc.read("I5,S") == 1
+    plc.power_break(1.0)
+    plc.advance(2.1)
+    assert plc.read("I5,S") == 1  # still there at the next power-up
+
+
+def test_wrong_declared_code_sets_the_fault_bit() -> None:
+    plc, mod = make(code=901)
+    plc.advance(2.1)
+    assert plc.read("I5,S") == 1
+    assert "declared code" in mod.status()["code"]
+    plc2, _ = make(code=900)
+    plc2.advance(2.1)
+    assert plc2.read("I5,S") == 0
+    plc3, _ = make(model="TSX 47-20", code=90)
+    plc3.advance(2.1)
+    assert plc3.read("I3,S") == 0
+
+
+def test_removal_and_insertion_under_power() -> None:
+    plc, mod = make()
+    plc.advance(2.1)
+    plc.remove(0, 5)
+    plc.advance(0.02)
+    assert plc.read("I5,S") == 1 and plc.read("IW5,0") == 0
+    assert mod.leds() == Leds(False, False, False)
+    plc.reinsert(0, 5)
+    plc.advance(0.02)
+    assert plc.read("IW5,0,9") == 1  # self-test again
+    assert mod.power_ups == 2
+
+
+def test_short_power_break_does_not_restart_the_modules() -> None:
+    plc, mod = make()
+    plc.advance(2.1)
+    plc.power_break(0.005)
+    assert mod.power_ups == 1
+    plc.power_break(0.5)
+    assert mod.power_ups == 2
+
+
+def test_message_system_reset_cancels_the_exchange_in_progress() -> None:
+    plc, mod = make()
+    plc.advance(2.1)
+    tb = plc.start_exchange(m=M, c=0x02, recv_bytes=0)
+    plc.advance(0.05)
+    assert mod.held and not tb.done
+    plc.write("OW5,0,2", 1)
+    plc.advance(0.05)
+    assert plc.read("IW5,0,2") == 1
+    assert tb.done and tb.result is not None and tb.result.e and tb.result.s == 1
+    plc.write("OW5,0,2", 0)
+    plc.advance(0.02)
+    assert plc.read("IW5,0,2") == 0
+
+
+def test_common_requests() -> None:
+    plc, mod = make()
+    plc.advance(2.1)
+    v = plc.exchange(m=M, c=0x0F, recv_bytes=27)
+    assert (v.v, v.s) == (0x3F, 27) and v.data.startswith(b"TEST DOUBLE V1.0")
+    w = plc.exchange(m=M, c=0x49, send_bytes=b"TANK 3")
+    assert (w.v, w.s, w.e) == (0xFE, 0, False)
+    r = plc.exchange(m=M, c=0x4A, recv_bytes=20)
+    assert (r.v, r.s) == (0x7A, 20) and r.data == b"TANK 3".ljust(20)
+    too_long = plc.exchange(m=M, c=0x49, send_bytes=b"x" * 21)
+    assert too_long.v == 0xFD
+    assert plc.exchange(m=M, c=0x49, send_bytes=b"").v == 0xFD
+    assert plc.exchange(m=M, c=0x55).v == 0xFD  # unknown request
+
+
+def test_requests_during_self_test_are_held_until_it_ends() -> None:
+    plc, mod = make()
+    r = plc.exchange(m=M, c=0x0F, recv_bytes=27)
+    assert r.v == 0x3F and r.ended_at >= 2_000_000
+
+
+def test_state_machine_rejects_an_impossible_event() -> None:
+    plc, mod = make()
+    with pytest.raises(ProtocolError, match="can't handle 'power on' in state self-test"):
+        mod.power_on()
+    plc.advance(2.1)
+    with pytest.raises(ProtocolError, match="'self-test done' in state operational"):
+        mod._fire(ModuleEvent.SELF_TEST_DONE, plc.now)
+
+
+def test_inject_unknown_fault_names_the_allowed_ones() -> None:
+    plc, mod = make()
+    with pytest.raises(ConfigError, match="allowed: terminal_block, sensor"):
+        mod.inject_fault("smoke", True)
