@@ -306,6 +306,10 @@ class IntelligentModule:
         """A request the base does not know: answer it with ``exchange.complete``."""
         exchange.complete(Answer(v=V_ERROR), now)
 
+    def endpoint_lines(self) -> list[str]:
+        """One line per real endpoint the module is wired to (printed by `fieldtwin run`)."""
+        return []
+
     def status_details(self) -> dict[str, str]:
         """Module-specific lines for the console and the live view."""
         return {}

@@ -1,0 +1,5 @@
+import sys
+
+from fieldtwin.cli import main
+
+sys.exit(main())

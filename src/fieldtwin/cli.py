@@ -1,0 +1,151 @@
+"""The `fieldtwin` command: run, console, tesis."""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from fieldtwin import __version__
+from fieldtwin.clock import S, SimClock
+from fieldtwin.errors import FieldtwinError
+
+
+def _speed(text: str) -> float | None:
+    if text.lower() in ("max", "fast", "0"):
+        return None
+    try:
+        value = float(text.lower().lstrip("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: a speed factor (1, 10, x10) or max") from None
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: the speed factor must be > 0")
+    return value
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="fieldtwin", description="Executable twins of TSX Series 7 modules and Leroy TES."
+    )
+    parser.add_argument("--version", action="version", version=f"fieldtwin {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True)
+    run = sub.add_parser("run", help="bring a plant to life in real time")
+    run.add_argument("plant", nargs="?", help="plant file (TOML); default: the embedded plant")
+    run.add_argument("--speed", type=_speed, default=1.0, help="x1 (default), x10, or max")
+    run.add_argument("--duration", type=float, help="stop after this many simulated seconds")
+    run.add_argument("--no-live", action="store_true", help="no live view, plain status lines")
+    run.add_argument(
+        "--status-every", type=float, default=0.0, help="with --no-live: status every N sim. s"
+    )
+    con = sub.add_parser("console", help="the programming terminal")
+    con.add_argument("plant", nargs="?", help="plant file (TOML); default: the embedded plant")
+    con.add_argument("--script", "-f", help="run commands from this file ('-' = stdin)")
+    con.add_argument(
+        "--command", "-c", dest="commands", action="append", help="run this command (repeatable)"
+    )
+    con.add_argument("--speed", type=_speed, default=1.0, help="pacing while real endpoints exist")
+    tesis = sub.add_parser("tesis", help="the TES parameter workbench", add_help=False)
+    tesis.add_argument("args", nargs=argparse.REMAINDER)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    try:
+        if args.command == "run":
+            return _run(args)
+        if args.command == "console":
+            return _console(args)
+        from fieldtwin.tes.tesis import main as tesis_main
+
+        return int(tesis_main(list(args.args)))
+    except FieldtwinError as exc:
+        print(f"fieldtwin: {exc}", file=sys.stderr)
+        return 2
+
+
+def _module_endpoints(plant: Any) -> list[str]:
+    lines: list[str] = []
+    if plant.plc is not None:
+        for module in plant.plc.modules:
+            lines.extend(module.endpoint_lines())
+    return lines
+
+
+def _run(args: argparse.Namespace) -> int:
+    from fieldtwin.live import plain_status, render
+    from fieldtwin.plant import load_plant
+    from fieldtwin.runtime.runner import Runner
+
+    clock = SimClock()
+    runner = Runner(clock, args.speed)
+    plant = load_plant(args.plant, runner=runner, speed=args.speed)
+    endpoints = plant.start_endpoints(runner) + _module_endpoints(plant)
+    for line in endpoints:
+        print(line, flush=True)
+    print(
+        f"running {plant.title} at {'max speed' if args.speed is None else f'x{args.speed:g}'}",
+        flush=True,
+    )
+    signal.signal(signal.SIGTERM, lambda *_: runner.stop())
+    live = sys.stdout.isatty() and not args.no_live
+    end = None if args.duration is None else clock.now + round(args.duration * S)
+    next_status = [clock.now]
+
+    def tick(now: int) -> None:
+        if end is not None and now >= end:
+            runner.stop()
+        if live_view is not None:
+            live_view.update(render(plant, endpoints))
+        elif args.status_every > 0 and now >= next_status[0]:
+            next_status[0] = now + round(args.status_every * S)
+            print("\n".join(plain_status(plant)), flush=True)
+
+    live_view: Any = None
+    try:
+        if live:
+            from rich.live import Live
+
+            with Live(render(plant, endpoints), refresh_per_second=5) as live_view:
+                runner.run_forever(tick, tick_us=_tick(args.speed))
+        else:
+            runner.run_forever(tick, tick_us=_tick(args.speed))
+    finally:
+        plant.close()
+    print(f"stopped at t = {clock.now / S:.3f} s", flush=True)
+    return 0
+
+
+def _tick(speed: float | None) -> int:
+    return 200_000 if speed is None else max(50_000, round(200_000 * speed))
+
+
+def _console(args: argparse.Namespace) -> int:
+    from fieldtwin.console import Console, run_script
+    from fieldtwin.plant import load_plant
+
+    plant = load_plant(args.plant, speed=args.speed)
+    console = Console(plant)
+    if args.commands:
+        return run_script(console, args.commands, sys.stdout, sys.stderr, "-c")
+    if args.script:
+        if args.script == "-":
+            return run_script(console, sys.stdin, sys.stdout, sys.stderr, "<stdin>")
+        try:
+            lines = Path(args.script).read_text("utf-8").splitlines()
+        except OSError as exc:
+            print(f"fieldtwin: {args.script}: {exc.strerror}", file=sys.stderr)
+            return 2
+        return run_script(console, lines, sys.stdout, sys.stderr, args.script)
+    if not sys.stdin.isatty():
+        return run_script(console, sys.stdin, sys.stdout, sys.stderr, "<stdin>")
+    from fieldtwin.terminal import interactive
+
+    return interactive(console, plant)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,77 @@
+"""The real `fieldtwin` command, run as a user runs it (subprocess)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def fieldtwin(
+    *args: str, stdin: str | None = None, timeout: float = 60
+) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "fieldtwin", *args],
+        input=stdin,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        cwd=ROOT,
+        check=False,
+    )
+
+
+def plc_plant(tmp_path: Path) -> Path:
+    path = tmp_path / "plc.toml"
+    path.write_text('[plc]\nmodel = "TSX 47-20"\nscan_ms = 10\n')
+    return path
+
+
+def test_console_script_from_a_file(tmp_path: Path) -> None:
+    script = tmp_path / "s.txt"
+    script.write_text("# set a word\nwrite W10 H'00A0'\nread W10\nadvance 1.5s\ntime\n")
+    done = fieldtwin("console", str(plc_plant(tmp_path)), "--script", str(script))
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines() == ["W10 = 160", "W10 = 160", "t = 1.500 s", "t = 1.500 s"]
+
+
+def test_console_script_error_exits_2_naming_the_line(tmp_path: Path) -> None:
+    done = fieldtwin("console", str(plc_plant(tmp_path)), stdin="time\nread IW5,X\ntime\n")
+    assert done.returncode == 2
+    assert done.stdout.splitlines() == ["t = 0.000 s"]
+    assert done.stderr.startswith("<stdin>:2: read IW5,X: 'IW5,X'")
+
+
+def test_console_commands_on_the_command_line(tmp_path: Path) -> None:
+    done = fieldtwin("console", str(plc_plant(tmp_path)), "-c", "advance 2min", "-c", "help time")
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines()[0] == "t = 120.000 s"
+
+
+def test_bad_plant_file_is_reported_with_status_2(tmp_path: Path) -> None:
+    path = tmp_path / "bad.toml"
+    path.write_text('[plc]\nmodel = "TSX 99"\n')
+    done = fieldtwin("console", str(path), "-c", "time")
+    assert done.returncode == 2
+    assert "bad.toml: plc.model: 'TSX 99' not allowed" in done.stderr
+
+
+def test_run_for_a_bounded_time_and_stop(tmp_path: Path) -> None:
+    done = fieldtwin(
+        "run",
+        str(plc_plant(tmp_path)),
+        "--speed",
+        "max",
+        "--duration",
+        "5",
+        "--no-live",
+        "--status-every",
+        "2",
+    )
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    assert lines[0].startswith("running plc at max speed")
+    assert lines[-1].startswith("stopped at t = 5.")
+    assert sum(line.startswith("t = ") for line in lines) >= 2
