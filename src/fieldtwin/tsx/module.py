@@ -482,14 +482,13 @@ class IntelligentModule:
 
     def bus_write(self, ow: list[int], o_bits: int, now: int) -> None:
         """The PLC refreshes the output words and bits."""
-        if self.state is ModuleState.OFF:
-            return
+        if self.state is ModuleState.OFF or (ow == self.ow and o_bits == self.o_bits):
+            return  # nothing new on the bus: an idle module costs nothing more
         old_ow, old_o = self.ow, self.o_bits
         self.ow, self.o_bits = list(ow), o_bits
         if not get_bit(old_ow[0], CMD_RESET_EXCHANGE) and get_bit(ow[0], CMD_RESET_EXCHANGE):
             self.reset_exchanges(now)  # message-system reset, rising edge
-        if old_ow != self.ow or old_o != o_bits:
-            self.on_outputs(old_ow, old_o, now)
+        self.on_outputs(old_ow, old_o, now)
         self.refresh_status()
 
     def bus_read(self) -> BusImage:

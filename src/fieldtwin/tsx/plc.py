@@ -298,9 +298,11 @@ class Plc:
             module.bus_write(entry.ow, entry.o_bits, now)
         elif entry.o_bits != module.o_bits:
             module.bus_write(module.ow, entry.o_bits, now)
-        image = module.bus_read()
-        iw = image.iw if registers else entry.image.iw
-        entry.image = BusImage(iw, image.i_bits, image.fault)
+        if registers:
+            entry.image = module.bus_read()
+        else:  # TSX 47-20 odd cycle: discrete bits only
+            image = module.bus_read()
+            entry.image = BusImage(entry.image.iw, image.i_bits, image.fault)
 
     # --- PLC modes -------------------------------------------------------------
 
