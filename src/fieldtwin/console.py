@@ -15,7 +15,7 @@ from fieldtwin.clock import S
 from fieldtwin.errors import ConfigError, FieldtwinError
 from fieldtwin.plant import Plant
 from fieldtwin.signals import signal_from_spec
-from fieldtwin.tsx.addressing import format_object, parse_object
+from fieldtwin.tsx.addressing import format_object, parse_module, parse_object
 from fieldtwin.tsx.plc import Plc
 from fieldtwin.words import format_hex, parse_word
 
@@ -360,8 +360,7 @@ def _channel(token: str) -> int:
 
 def _module_address(token: str) -> tuple[int, int]:
     """'5' -> rack 0 slot 5; '23' -> rack 2 slot 3."""
-    ref = parse_object(f"I{token},S")
-    return ref.rack, ref.slot
+    return parse_module(token)
 
 
 def _looks_like_object(token: str) -> bool:

@@ -35,7 +35,8 @@ def get_bit(word: int, bit: int) -> int:
 
 def set_bit(word: int, bit: int, value: bool | int) -> int:
     _check_bit(bit)
-    return (word | (1 << bit)) if value else (word & ~(1 << bit) & WORD_MASK)
+    word &= WORD_MASK
+    return (word | (1 << bit)) if value else (word & ~(1 << bit))
 
 
 def _check_bit(bit: int) -> None:
@@ -112,7 +113,7 @@ def words_to_bytes(words: Iterable[int], length: int | None = None) -> bytes:
         out.append(w & 0xFF)
         out.append(w >> 8)
     if length is not None:
-        if length > len(out):
+        if not 0 <= length <= len(out):
             raise ConfigError(f"{length} bytes asked from {len(out)} bytes of words")
         del out[length:]
     return bytes(out)
@@ -120,11 +121,12 @@ def words_to_bytes(words: Iterable[int], length: int | None = None) -> bytes:
 
 # --- H'00A0' ---------------------------------------------------------------
 
-_HEX_RE = re.compile(r"^[HB]'([0-9A-Fa-f]{1,4})'?$")
+# The manual renderings often print the quote as a typographic one: H’563 (AEM 3.5-2).
+_HEX_RE = re.compile(r"^[HB]['’]([0-9A-F]{1,4})['’]?$", re.IGNORECASE)
 
 
 def parse_word(token: str) -> int:
-    """``H'00A0'``, ``B'0802'``, ``0x00A0``, ``-5`` or ``160`` -> 0..65535."""
+    """``H'00A0'``, ``h'a0'``, ``H’563``, ``B'0802'``, ``0x00A0``, ``-5`` or ``160`` -> 0..65535."""
     text = token.strip()
     match = _HEX_RE.match(text)
     if match:
@@ -133,8 +135,7 @@ def parse_word(token: str) -> int:
         value = int(text, 0) if text.lower().startswith(("0x", "-0x")) else int(text, 10)
     except ValueError:
         raise ConfigError(
-            f"{token!r} is not a word value (allowed H'0000'..H'FFFF', 0x0..0xFFFF,"
-            " -32768..65535)"
+            f"{token!r} is not a word value (allowed H'0000'..H'FFFF', 0x0..0xFFFF, -32768..65535)"
         ) from None
     return to_unsigned(value)
 
