@@ -73,6 +73,17 @@ def test_47_20_takes_intelligent_modules_in_its_first_four_slots_only() -> None:
         plc.insert(DOUBLE, rack=1, slot=0)
 
 
+def test_47_30_basic_rack_takes_five_intelligent_modules() -> None:
+    # AEM 6.1-1: "Basic configuration TSX 47 30 (single rack): any slot, 5 intelligent
+    # modules max."
+    plc = Plc(model="TSX 47-30")
+    for slot in range(5):
+        plc.insert(DOUBLE, rack=0, slot=slot)
+    with pytest.raises(ConfigError, match="at most 5 intelligent modules"):
+        plc.insert(DOUBLE, rack=0, slot=5)
+    plc.insert(DOUBLE, rack=1, slot=0)  # an extension rack: any slot
+
+
 def test_47_20_refreshes_register_words_every_second_cycle() -> None:
     # AEM 2.4-3: register words updated on every second cycle of a TSX 47-20
     plc, mod = make("TSX 47-20")

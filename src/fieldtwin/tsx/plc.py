@@ -53,11 +53,13 @@ class PlcModel:
     report_name: str  # TXTi,R on a TSX 47-20, TXTi,V elsewhere (SCM 3.3)
     racks: int
     intelligent_slots: int  # slots of a rack that take intelligent modules
+    basic_rack_max: int = 8  # intelligent modules in the basic rack (AEM 6.1-1)
 
 
 MODELS = {
     "TSX 47-20": PlcModel("TSX 47-20", 2, 30, "R", 1, 4),
-    "TSX 47-30": PlcModel("TSX 47-30", 1, 254, "V", 8, 8),
+    # AEM 6.1-1: a single-rack basic configuration takes 5 intelligent modules at most
+    "TSX 47-30": PlcModel("TSX 47-30", 1, 254, "V", 8, 8, 5),
     "TSX 67": PlcModel("TSX 67", 1, 254, "V", 8, 8),
     "TSX 87": PlcModel("TSX 87", 1, 254, "V", 8, 8),
 }
@@ -209,6 +211,12 @@ class Plc:
             )
         if (rack, slot) in self._slots:
             raise ConfigError(f"rack {rack} slot {slot} is already taken")
+        in_basic = sum(1 for r, _ in self._slots if r == 0)
+        if rack == 0 and in_basic >= self.model.basic_rack_max:
+            raise ConfigError(
+                f"slot {slot}: the basic rack of a {self.model.name} takes at most"
+                f" {self.model.basic_rack_max} intelligent modules"
+            )
 
     def module(self, rack: int, slot: int) -> Any:
         try:
