@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import enum
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Protocol, runtime_checkable
 
 
 class ExceptionCode(enum.IntEnum):
@@ -99,10 +99,19 @@ class ReadExceptionStatus:
 
 Request = ReadBits | ReadWords | WriteBit | WriteWord | WriteBits | WriteWords | ReadExceptionStatus
 
+
+class NoReply(enum.Enum):
+    """A device that stays silent (unpowered, ...): the core sends nothing back."""
+
+    NO_REPLY = "no_reply"
+
+
+NO_REPLY = NoReply.NO_REPLY
+
 # What a device answers: bits for ReadBits, words for ReadWords, an int (the
-# 8-bit status) for ReadExceptionStatus, None for a write that succeeded, or an
-# ExceptionCode.
-Result = tuple[bool, ...] | tuple[int, ...] | int | None | ExceptionCode
+# 8-bit status) for ReadExceptionStatus, None for a write that succeeded, an
+# ExceptionCode, or NO_REPLY to stay silent.
+Result = tuple[bool, ...] | tuple[int, ...] | int | None | ExceptionCode | NoReply
 
 
 class SlaveDevice(Protocol):
@@ -124,3 +133,25 @@ class SlaveDevice(Protocol):
     def answer_delay(self, link: Link) -> int:
         """Microseconds to wait before replying (TES answer delay, 0..2570 ms)."""
         ...
+
+
+# --- optional device abilities (added by the Modbus core; a device may have them) ---
+
+
+@runtime_checkable
+class PerLinkSlave(Protocol):
+    """A device with a slave number of its own on each link (TES 3.1.3 / 3.1.4)."""
+
+    def slave_for(self, link: Link) -> int: ...
+
+
+@runtime_checkable
+class LineFaultSource(Protocol):
+    """A device that asks the RTU line to corrupt the next frame addressed to it.
+
+    The line calls ``take_line_fault`` once per frame it delivers to the device;
+    a fault whose ``value`` is ``"bad_crc"`` turns the frame into a CRC error,
+    ``"broken_character"`` into one wrong character (the frame is dropped).
+    """
+
+    def take_line_fault(self, link: Link) -> enum.Enum | None: ...

@@ -1,0 +1,198 @@
+"""Modbus TCP throughput and latency: our server glue against a plain pymodbus server.
+
+Each server runs in its own process; each client connection is its own process
+(a raw-socket closed loop: send one MBAP "read 10 holding registers", wait for
+the reply, repeat), so neither side shares a GIL with the other.  For 1 and 8
+concurrent connections it prints requests per second, p50 and p99 latency, and
+the ratio ours / pymodbus.  Bounded: DURATION_S per case.
+
+    .venv/bin/python benchmarks/modbus_tcp.py [--duration 2.0]
+"""
+
+from __future__ import annotations
+
+import argparse
+import multiprocessing as mp
+import socket
+import statistics
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from multiprocessing.queues import Queue
+
+from pymodbus.datastore import ModbusDeviceContext, ModbusSequentialDataBlock, ModbusServerContext
+from pymodbus.server import StartTcpServer
+
+from fieldtwin.clock import SimClock
+from fieldtwin.modbus.mbap import encode_mbap
+from fieldtwin.modbus.model import Counter, Link, ReadWords, Request, Result, SlaveDevice
+from fieldtwin.modbus.pdu import encode_request
+from fieldtwin.runtime.modbus_server import serve_tcp
+from fieldtwin.runtime.runner import Runner
+from fieldtwin.transports.tcp import listen
+
+WORDS = 10
+UNIT = 1
+READY_TIMEOUT_S = 10.0
+REPLY_SIZE = 9 + 2 * WORDS
+
+
+# --- servers (each in its own process) ------------------------------------------
+
+
+class Table:
+    """The static table behind our server: 256 holding words, like pymodbus's datastore."""
+
+    def __init__(self, slave: int) -> None:
+        self.slave = slave
+        self.words = tuple(range(256))
+
+    def execute(self, request: Request, link: Link, now: int, broadcast: bool) -> Result:
+        assert isinstance(request, ReadWords)
+        return self.words[request.address : request.address + request.count]
+
+    def count(self, link: Link, counter: Counter, now: int) -> None:
+        pass
+
+    def answer_delay(self, link: Link) -> int:
+        return 0
+
+
+def _free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return int(sock.getsockname()[1])
+
+
+def _serve_ours(kind: str, ports: Queue[int]) -> None:
+    clock = SimClock()
+    devices: list[SlaveDevice]
+    if kind == "tes":
+        from fieldtwin.tes import Tes
+
+        devices = [Tes("32EST", UNIT, clock=clock)]
+    else:
+        devices = [Table(UNIT)]
+    runner = Runner(clock, speed=1.0)
+    listener = listen("127.0.0.1", 0)
+    serve_tcp(runner, listener, devices)
+    ports.put(listener.address[1])
+    runner.run_forever()
+
+
+def _serve_pymodbus(ports: Queue[int]) -> None:
+    # pymodbus maps request address 0 to block address 1.
+    block = ModbusSequentialDataBlock(1, list(range(256)))  # type: ignore[no-untyped-call]
+    context = ModbusServerContext(devices=ModbusDeviceContext(hr=block), single=True)
+    port = _free_port()
+    ports.put(port)
+    StartTcpServer(context=context, address=("127.0.0.1", port))
+
+
+# --- the client (one process per connection) ------------------------------------
+
+
+def _client(port: int, duration: float, start_at: float, out: Queue[list[float]]) -> None:
+    request = encode_request(ReadWords(3, 0, WORDS))
+    sock = socket.create_connection(("127.0.0.1", port), timeout=5)
+    sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+    latencies: list[float] = []
+    while time.time() < start_at:
+        time.sleep(0.001)
+    end = time.perf_counter() + duration
+    tid = 0
+    while (t0 := time.perf_counter()) < end:
+        tid = (tid + 1) & 0xFFFF
+        sock.sendall(encode_mbap(tid, UNIT, request))
+        got = b""
+        while len(got) < REPLY_SIZE:
+            chunk = sock.recv(4096)
+            if not chunk:
+                raise SystemExit("server closed the connection")
+            got += chunk
+        assert got[:2] == tid.to_bytes(2, "big"), got.hex()
+        latencies.append(time.perf_counter() - t0)
+    sock.close()
+    out.put(latencies)
+
+
+@dataclass(frozen=True)
+class Figures:
+    rps: float
+    p50_ms: float
+    p99_ms: float
+
+
+def _measure(port: int, connections: int, duration: float) -> Figures:
+    out: Queue[list[float]] = mp.Queue()
+    start_at = time.time() + 0.5
+    procs = [
+        mp.Process(target=_client, args=(port, duration, start_at, out)) for _ in range(connections)
+    ]
+    for proc in procs:
+        proc.start()
+    samples = [out.get(timeout=duration + 30) for _ in procs]
+    for proc in procs:
+        proc.join(10)
+    merged = sorted(x for s in samples for x in s)
+    if not merged:
+        raise SystemExit("no request completed")
+    p99 = merged[min(len(merged) - 1, int(len(merged) * 0.99))]
+    return Figures(len(merged) / duration, statistics.median(merged) * 1e3, p99 * 1e3)
+
+
+def _with_server(target: Callable[..., None], args: tuple[object, ...]) -> mp.Process:
+    return mp.Process(target=target, args=args, daemon=True)
+
+
+def _run_case(
+    name: str, make: Callable[[Queue[int]], mp.Process], duration: float
+) -> dict[int, Figures]:
+    ports: Queue[int] = mp.Queue()
+    server = make(ports)
+    server.start()
+    try:
+        port = ports.get(timeout=READY_TIMEOUT_S)
+        time.sleep(0.3)  # let the server reach its accept loop
+        return {n: _measure(port, n, duration) for n in (1, 8)}
+    finally:
+        server.terminate()
+        server.join(5)
+        print(f"  done: {name}", file=sys.stderr)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--duration", type=float, default=2.0, help="seconds per case")
+    args = parser.parse_args()
+    mp.set_start_method("spawn", force=True)
+    cases: dict[str, Callable[[Queue[int]], mp.Process]] = {
+        "fieldtwin (table device)": lambda q: _with_server(_serve_ours, ("table", q)),
+    }
+    try:
+        from fieldtwin.tes import Tes  # noqa: F401
+
+        cases["fieldtwin (TES 32EST)"] = lambda q: _with_server(_serve_ours, ("tes", q))
+    except ImportError:
+        print("fieldtwin.tes.Tes not available: TES case skipped", file=sys.stderr)
+    cases["pymodbus 3.16 (static datastore)"] = lambda q: _with_server(_serve_pymodbus, (q,))
+    results = {name: _run_case(name, make, args.duration) for name, make in cases.items()}
+    _report(results, args.duration)
+
+
+def _report(results: dict[str, dict[int, Figures]], duration: float) -> None:
+    base = results["pymodbus 3.16 (static datastore)"]
+    print(f"Modbus TCP, fc03 read {WORDS} words, {duration:.1f} s per case, loopback")
+    print(f"{'server':34} {'conns':>5} {'req/s':>9} {'p50 ms':>8} {'p99 ms':>8} {'x pymodbus':>11}")
+    for name, by_conn in results.items():
+        for conns, fig in by_conn.items():
+            ratio = fig.rps / base[conns].rps
+            print(
+                f"{name:34} {conns:>5} {fig.rps:>9.0f} {fig.p50_ms:>8.3f} {fig.p99_ms:>8.3f}"
+                f" {ratio:>11.2f}"
+            )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,152 @@
+"""Character times, RTU silences and the TES transmission-time model (TES 7.2.7).
+
+Nothing here imports the transports: a line's character format is anything with
+``baud``, ``data_bits``, ``parity`` and ``stop_bits`` (``LineSettings`` fits).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Protocol
+
+from fieldtwin.clock import MS, S
+from fieldtwin.errors import ConfigError
+from fieldtwin.modbus.model import (
+    ReadBits,
+    ReadExceptionStatus,
+    ReadWords,
+    Request,
+    WriteBits,
+    WriteWords,
+)
+
+
+class CharFormat(Protocol):
+    """A serial character format (``fieldtwin.transports.base.LineSettings`` fits)."""
+
+    @property
+    def baud(self) -> int: ...
+    @property
+    def data_bits(self) -> int: ...
+    @property
+    def parity(self) -> str: ...
+    @property
+    def stop_bits(self) -> int: ...
+
+
+def bits_per_char(fmt: CharFormat) -> int:
+    """Nb of TES 7.2.7: start + data + parity + stop bits ("from 8 to 11")."""
+    if fmt.parity not in ("N", "E", "O"):
+        raise ConfigError(f"parity {fmt.parity!r}: allowed N, E, O")
+    return 1 + fmt.data_bits + (0 if fmt.parity == "N" else 1) + fmt.stop_bits
+
+
+def char_time(fmt: CharFormat) -> Fraction:
+    """One character's duration in microseconds, exactly."""
+    if fmt.baud <= 0:
+        raise ConfigError(f"baud {fmt.baud}: must be > 0")
+    return Fraction(bits_per_char(fmt) * S, fmt.baud)
+
+
+@dataclass(frozen=True, slots=True)
+class RtuTiming:
+    """The silences an RTU receiver keeps, in microseconds.
+
+    ``char_us``: one character; ``t15_us``: the longest silence allowed inside a
+    frame; ``t35_us``: the silence that ends a frame.  ``eager``: a frame whose
+    length and CRC check is complete at once, without waiting for the silence
+    (for streams that carry no timing, such as RTU over TCP).
+    """
+
+    char_us: int
+    t15_us: int
+    t35_us: int
+    eager: bool = False
+
+    def __post_init__(self) -> None:
+        if not (self.char_us > 0 and 0 < self.t15_us < self.t35_us):
+            raise ConfigError(f"RTU timing {self}: need 0 < char, 0 < t1.5 < t3.5")
+
+    @classmethod
+    def from_format(cls, fmt: CharFormat) -> RtuTiming:
+        """Modbus RTU: t1.5 and t3.5 character times of the line's format."""
+        ct = char_time(fmt)
+        return cls(round(ct), round(ct * 3 / 2), round(ct * 7 / 2))
+
+    def relaxed(self, floor_us: int, eager: bool = False) -> RtuTiming:
+        """The same line with silences at least ``floor_us`` / 2 x ``floor_us``.
+
+        Real transports (ptys, TCP) deliver bytes with operating-system jitter and
+        no line timing; a floor keeps one frame from being cut in two.
+        """
+        t15 = max(self.t15_us, floor_us)
+        return RtuTiming(self.char_us, t15, max(self.t35_us, 2 * t15), eager)
+
+
+# --- TES 7.2.7 transmission time -------------------------------------------------
+
+# TES 7.2.7: "Sq and Sr ... (3 defined in Modbus norm)"; AMB-TES-30 keeps 3.
+SILENT_CHARS = 3
+# TES 7.2.7: "Typically tr is equal to 1,5 ms"; tq "evaluated to 1.5ms".
+TYPICAL_TR_US = 1500
+TYPICAL_TQ_US = 1500
+
+
+def request_bytes(request: Request) -> int:
+    """Nq of TES 7.2: bytes of the RTU request frame."""
+    match request:
+        case WriteWords(values=vs):
+            return 9 + 2 * len(vs)  # TES 7.2.2
+        case WriteBits(values=vs):
+            return 9 + (len(vs) + 7) // 8  # TES 7.2.5, AMB-TES-07
+        case ReadExceptionStatus():
+            return 4  # TES 7.2.6
+    return 8  # TES 7.2.1, 7.2.3, 7.2.4 and fc05
+
+
+def reply_bytes(request: Request) -> int:
+    """Nr of TES 7.2: bytes of the normal RTU reply frame."""
+    match request:
+        case ReadWords(count=n):
+            return 5 + 2 * n  # TES 7.2.1
+        case ReadBits(count=n):
+            return 5 + (n + 7) // 8  # TES 7.2.4, AMB-TES-07
+        case ReadExceptionStatus():
+            return 5  # TES 7.2.6
+    return 8  # TES 7.2.2, 7.2.3, 7.2.5 and fc05
+
+
+def exchange_time_us(
+    nb: int,
+    baud: int,
+    nq: int,
+    nr: int,
+    sq: int = SILENT_CHARS,
+    sr: int = SILENT_CHARS,
+    tq_us: int = TYPICAL_TQ_US,
+    tr_us: int = TYPICAL_TR_US,
+) -> int:
+    """TES 7.2.7: T = [Nb x 1000 / Vt x (Nq + Sq + Nr + Sr)] + tq + tr, in us."""
+    if not 8 <= nb <= 11:
+        raise ConfigError(f"Nb {nb}: TES 7.2.7 allows 8 to 11 bits per character")
+    if baud <= 0:
+        raise ConfigError(f"baud {baud}: must be > 0")
+    line = Fraction(nb * S, baud) * (nq + sq + nr + sr)
+    return round(line) + tq_us + tr_us
+
+
+def request_exchange_time_us(
+    request: Request,
+    fmt: CharFormat,
+    tq_us: int = TYPICAL_TQ_US,
+    tr_us: int = TYPICAL_TR_US,
+) -> int:
+    """TES 7.2.7 exchange time of one request and its normal reply on ``fmt``."""
+    nq, nr = request_bytes(request), reply_bytes(request)
+    return exchange_time_us(bits_per_char(fmt), fmt.baud, nq, nr, tq_us=tq_us, tr_us=tr_us)
+
+
+def as_ms(us: int) -> float:
+    """Microseconds -> milliseconds, for reports."""
+    return us / MS

@@ -1,0 +1,201 @@
+"""Modbus server glue: the sans-IO cores of ``fieldtwin.modbus`` on real transports.
+
+``serve_tcp`` (Modbus TCP, any number of connections), ``serve_rtu`` (an RTU
+line on a pty, a serial port or a memory transport) and ``serve_rtu_over_tcp``
+(RTU frames inside TCP connections) attach the cores to a ``Runner``.  Each
+core says when it next needs the clock (``next_deadline``); one clock event per
+core wakes it then, and replies are sent the instant they are due.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from typing import Protocol
+
+from fieldtwin.clock import MS, Handle
+from fieldtwin.errors import TransportError
+from fieldtwin.modbus.line import RtuLine, Wiring
+from fieldtwin.modbus.model import Link, SlaveDevice
+from fieldtwin.modbus.session import TcpSession
+from fieldtwin.modbus.slave import SlaveSet, Transmission
+from fieldtwin.modbus.timing import RtuTiming
+from fieldtwin.runtime.runner import Runner
+from fieldtwin.transports.base import LineSettings, Listener, Transport
+
+# Real transports deliver bytes with operating-system jitter and no line timing:
+# a frame complete by length and CRC is taken at once (eager), and inside a
+# frame a silence up to this (wall) time is not a break (see docs/modbus.md).
+REAL_LINE_FLOOR_US = 2 * MS
+# RTU over TCP carries no line timing at all: frames are cut by length and CRC
+# (eager), this silence only flushes bytes that never made a frame.
+TCP_STREAM_FLOOR_US = 50 * MS
+
+
+class Core(Protocol):
+    """What the glue needs from a sans-IO core (RtuLine, TcpSession)."""
+
+    def receive(self, data: bytes, now: int) -> None: ...
+    def poll(self, now: int) -> list[Transmission]: ...
+    def next_deadline(self) -> int | None: ...
+
+
+class _Pump:
+    """One core bound to one transport on the runner's clock."""
+
+    def __init__(self, runner: Runner, transport: Transport, core: Core) -> None:
+        self.runner = runner
+        self.transport = transport
+        self.core = core
+        self._timer: Handle | None = None
+        runner.attach(transport, self.on_data, self.on_close)
+
+    def on_data(self, data: bytes, now: int) -> None:
+        self.core.receive(data, now)
+        self._flush(now)
+
+    def on_close(self, now: int) -> None:
+        self.close()
+
+    def close(self) -> None:
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+        self.runner.detach(self.transport)
+        if not self.transport.closed:
+            self.transport.close()
+
+    def _wake(self, now: int) -> None:
+        self._timer = None
+        self._flush(now)
+
+    def _flush(self, now: int) -> None:
+        try:
+            for transmission in self.core.poll(now):
+                self.transport.send(transmission.data)
+        except TransportError:
+            self.close()
+            return
+        if isinstance(self.core, TcpSession) and self.core.closed:
+            self.close()
+            return
+        self._rearm()
+
+    def _rearm(self) -> None:
+        deadline = self.core.next_deadline()
+        timer = self._timer
+        if timer is not None and timer.active and timer.time == deadline:
+            return
+        if timer is not None:
+            timer.cancel()
+        self._timer = None if deadline is None else self.runner.clock.schedule(deadline, self._wake)
+
+
+def _slaves_text(slaves: SlaveSet) -> str:
+    return ",".join(str(n) for n in slaves.numbers)
+
+
+def _scaled(runner: Runner, floor_us: int) -> int:
+    """A wall-time floor in simulated microseconds at the runner's speed."""
+    return int(floor_us * (runner.speed or 1.0))
+
+
+class ModbusServer:
+    """What the ``serve_*`` functions return: ``describe()`` and ``close()``."""
+
+    def __init__(
+        self,
+        runner: Runner,
+        kind: str,
+        where: str,
+        slaves: SlaveSet,
+        line: str = "",
+        listener: Listener | None = None,
+    ) -> None:
+        self.runner = runner
+        self.kind = kind
+        self.where = where
+        self.slaves = slaves
+        self._line = line
+        self._listener = listener
+        self.pumps: list[_Pump] = []
+        self.closed = False
+
+    def describe(self) -> str:
+        """One line: ``listening: modbus-tcp tcp://127.0.0.1:5020 slaves 1,2``."""
+        text = f"listening: {self.kind} {self.where} slaves {_slaves_text(self.slaves)}"
+        return f"{text} ({self._line})" if self._line else text
+
+    @property
+    def connections(self) -> int:
+        """Open transports served (TCP connections, or the one RTU line)."""
+        self.pumps = [p for p in self.pumps if not p.transport.closed]
+        return len(self.pumps)
+
+    def close(self) -> None:
+        """Stop listening and close every transport this server serves."""
+        self.closed = True
+        if self._listener is not None:
+            self.runner.detach(self._listener)
+            self._listener.close()
+        for pump in self.pumps:
+            pump.close()
+        self.pumps.clear()
+
+
+def serve_tcp(
+    runner: Runner, listener: Listener, devices: Iterable[SlaveDevice], link: Link = Link.TCP
+) -> ModbusServer:
+    """Modbus TCP on ``listener``: one session per connection, units = slave numbers."""
+    slaves = SlaveSet(devices, link)
+    host, port = listener.address
+    server = ModbusServer(runner, "modbus-tcp", f"tcp://{host}:{port}", slaves, listener=listener)
+
+    def on_connect(transport: Transport, now: int) -> None:
+        server.pumps.append(_Pump(runner, transport, TcpSession(slaves)))
+
+    runner.attach_listener(listener, on_connect)
+    return server
+
+
+def serve_rtu(
+    runner: Runner,
+    transport: Transport,
+    devices: Iterable[SlaveDevice],
+    link: Link,
+    settings: LineSettings,
+    wiring: Wiring = Wiring.DOUBLE_PAIR,
+) -> ModbusServer:
+    """A Modbus RTU line on ``transport`` (pty, serial port or memory)."""
+    timing = RtuTiming.from_format(settings)
+    if transport.is_real:
+        timing = timing.relaxed(_scaled(runner, REAL_LINE_FLOOR_US), eager=True)
+    line = RtuLine(devices, link, timing, wiring)
+    where = f"pty {transport.peer_path}" if transport.peer_path else transport.name
+    server = ModbusServer(runner, "modbus-rtu", where, line.slaves, str(settings))
+    server.pumps.append(_Pump(runner, transport, line))
+    return server
+
+
+def serve_rtu_over_tcp(
+    runner: Runner,
+    listener: Listener,
+    devices: Iterable[SlaveDevice],
+    settings: LineSettings,
+    link: Link = Link.RS485,
+    wiring: Wiring = Wiring.DOUBLE_PAIR,
+) -> ModbusServer:
+    """RTU frames inside TCP connections (a serial-to-Ethernet gateway in front of a line)."""
+    devices = tuple(devices)
+    slaves = SlaveSet(devices, link)
+    timing = RtuTiming.from_format(settings).relaxed(
+        _scaled(runner, TCP_STREAM_FLOOR_US), eager=True
+    )
+    host, port = listener.address
+    where = f"rtu+tcp://{host}:{port}"
+    server = ModbusServer(runner, "modbus-rtu-over-tcp", where, slaves, str(settings), listener)
+
+    def on_connect(transport: Transport, now: int) -> None:
+        server.pumps.append(_Pump(runner, transport, RtuLine(devices, link, timing, wiring)))
+
+    runner.attach_listener(listener, on_connect)
+    return server
