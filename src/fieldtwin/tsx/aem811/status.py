@@ -1,0 +1,56 @@
+"""Lines for the console ``status`` command and the live view."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from fieldtwin.tsx.aem811.module import RELAY_LIFE
+from fieldtwin.tsx.aem811.scaling import Scaling
+
+if TYPE_CHECKING:
+    from fieldtwin.tsx.aem811.module import Aem811
+
+_SCALING = {Scaling.INPUT_RANGE: "input range", Scaling.STANDARD: "standard", Scaling.USER: "user"}
+
+
+def details(mod: Aem811) -> dict[str, str]:
+    config = mod.config
+    lines = {
+        "configuration": "default" if mod.default_configuration else "user",
+        "sampling": (
+            f"accelerated ({bin(mod.enabled).count('1')} x 100 ms)"
+            if mod.accelerated
+            else f"normal, period {config.period} x 100 ms"
+        ),
+    }
+    if mod.rejection is not None:
+        lines["last refusal"] = mod.rejection.reason
+    enabled = mod.enabled
+    for channel, cfg in enumerate(config.channels):
+        text = f"{cfg.range.name}, {_SCALING[cfg.scaling]}"
+        if cfg.scaling is Scaling.USER:
+            text += f" {cfg.low}..{cfg.high}"
+        text += ", sqrt" * cfg.sqrt + ", continuity test" * cfg.continuity
+        state = "inhibited" if not enabled >> channel & 1 else f"= {mod.values[channel]}"
+        m = mod.measurements[channel]
+        faults = [
+            name
+            for name, on in (
+                ("ELL", m and m.below),
+                ("continuity", m and m.continuity),
+                ("overflow", m and m.overflow),
+                ("EHL", m and m.above),
+            )
+            if on
+        ]
+        thresholds = "".join(str(mod.thresholds.bits >> (channel + 8 * lv) & 1) for lv in (0, 1))
+        text += f"; {state}; thresholds {mod.thresholds.values[0][channel]}/"
+        text += f"{mod.thresholds.values[1][channel]} bits {thresholds}"
+        if faults:
+            text += f"; FAULT {' '.join(faults)}"
+        lines[f"channel {channel}"] = text
+    total = sum(mod.relay_operations)
+    lines["relay operations"] = (
+        f"{total} (max per channel {max(mod.relay_operations)} of a {RELAY_LIFE:.0e} life)"
+    )
+    return lines
