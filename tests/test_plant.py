@@ -47,7 +47,7 @@ faults = ["sensor"]
     [
         ("[plc]\nmodel = 'TSX 99'", "plant.toml: plc.model: 'TSX 99' not allowed (allowed: TSX"),
         ("[plc]\nscan_ms = 0", "plant.toml: plc.scan_ms: 0 not allowed (allowed 1..1000 ms)"),
-        ("[plc]\nspeed = 3", "plant.toml: plc: unknown key(s) speed (allowed: model, scan_ms)"),
+        ("[plc]\nspeed = 3", "plant.toml: plc: unknown key(s) speed (allowed: model, scan_ms, outputs)"),
         ("[plcs]\n", "plant.toml: unknown top-level key(s) plcs (allowed: plant, plc, module"),
         ("[[module]]\nslot = 3", "plant.toml: module[0].type: missing or not a string"),
         (f"[[module]]\ntype = '{DOUBLE}'", "plant.toml: module[0].slot: missing"),
@@ -64,12 +64,25 @@ faults = ["sensor"]
         ),
         ("[plc\n", "plant.toml: not valid TOML"),
         ("[run]\nspeed = -1", "plant.toml: run.speed: -1 not allowed"),
+        (
+            f"[plc]\noutputs = {{ 'IW5,0' = 1 }}\n[[module]]\ntype = '{DOUBLE}'\nslot = 5",
+            "plant.toml: plc.outputs.'IW5,0': 'IW5,0' is an input",
+        ),
+        ("[plc]\noutputs = { 'OW5,0,C' = 1 }", "plc.outputs.'OW5,0,C': no module in rack 0 slot 5"),
     ],
 )
 def test_validation_errors_name_the_field(tmp_path: Path, text: str, message: str) -> None:
     with pytest.raises(ConfigError) as info:
         load_plant(write(tmp_path, text))
     assert message in str(info.value)
+
+
+def test_initial_outputs_put_a_module_in_run(tmp_path: Path) -> None:
+    text = f"[plc]\noutputs = {{ 'OW5,0,C' = 1 }}\n[[module]]\ntype = '{DOUBLE}'\nslot = 5\n"
+    plant = load_plant(write(tmp_path, text))
+    assert plant.plc is not None
+    plant.plc.advance(2.1)
+    assert plant.plc.read("IW5,0,C") == 1
 
 
 def test_missing_file_is_named(tmp_path: Path) -> None:

@@ -176,14 +176,30 @@ def _build_plc(
         or not 1 <= scan_ms <= 1000
     ):
         raise ConfigError(f"{name}: plc.scan_ms: {scan_ms!r} not allowed (allowed 1..1000 ms)")
+    outputs = plc_table.pop("outputs", {})
     if plc_table:
         raise ConfigError(
-            f"{name}: plc: unknown key(s) {', '.join(sorted(plc_table))} (allowed: model, scan_ms)"
+            f"{name}: plc: unknown key(s) {', '.join(sorted(plc_table))}"
+            " (allowed: model, scan_ms, outputs)"
         )
     plc = Plc(model=model, scan_ms=scan_ms, clock=clock, runner=runner, speed=speed)
     for index, table in enumerate(modules):
         _insert(plc, table, f"{name}: module[{index}]", plant_file.base_dir)
+    _initial_outputs(plc, outputs, f"{name}: plc.outputs")
     return plc
+
+
+def _initial_outputs(plc: Plc, outputs: Any, where: str) -> None:
+    """``[plc] outputs = { "OW5,0,C" = 1 }``: what the PLC program writes from the start."""
+    if not isinstance(outputs, Mapping):
+        raise ConfigError(f'{where}: must be a table of objects, e.g. {{ "OW5,0,C" = 1 }}')
+    for obj, value in outputs.items():
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ConfigError(f"{where}.{obj!r}: {value!r} is not an integer")
+        try:
+            plc.write(obj, value)
+        except ConfigError as exc:
+            raise ConfigError(f"{where}.{obj!r}: {exc}") from None
 
 
 def _int_field(table: Mapping[str, Any], key: str, where: str, default: int | None = None) -> int:
