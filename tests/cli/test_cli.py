@@ -75,3 +75,19 @@ def test_run_for_a_bounded_time_and_stop(tmp_path: Path) -> None:
     assert lines[0].startswith("running plc at max speed")
     assert lines[-1].startswith("stopped at t = 5.")
     assert sum(line.startswith("t = ") for line in lines) >= 2
+
+
+def test_default_plant_runs_the_tank_application() -> None:
+    done = fieldtwin(
+        "run", "--speed", "max", "--duration", "12", "--no-live", "--status-every", "11"
+    )
+    assert done.returncode == 0, done.stderr
+    assert "slot 5 TSX AEM 811: Run OK=on ERR=off F=off IW H'1008'" in done.stdout
+
+
+def test_default_plant_in_the_console() -> None:
+    done = fieldtwin("console", "-c", "advance 12", "-c", "read IW5,0,C IW5,2,D", "-c", "status 5")
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    assert lines[:3] == ["t = 12.000 s", "IW5,0,C = 1", "IW5,2,D = 0"]
+    assert "leds: OK=on ERR=off F=off" in lines
