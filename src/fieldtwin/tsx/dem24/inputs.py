@@ -1,0 +1,188 @@
+"""The 24 discrete inputs: voltage thresholds, the 500 us hardware filter and FILT (2.1-1).
+
+An input is a bool, or a voltage judged against the IEC 61131-2 type 1 limits of the
+24 V (DEM 2412) or 48 V (DEM 2413) module (7.2 "Type 1"); between the limits the
+input keeps its state.  A change is accepted once the level has held for the
+hardware filter (500 us, 1.2-1) and the software filter FILT (0/10/20/50 ms, 3.2-1),
+whichever is longer; the change is time-stamped at its edge, to the millisecond of
+the module clock.  Signals say when they next change: the bank schedules exactly
+those edges (DESIGN rule 3) and nothing else.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from fieldtwin.clock import MS, Handle, SimClock
+from fieldtwin.errors import ConfigError
+from fieldtwin.signals import AnalogSignal, DiscreteSignal
+
+CHANNELS = 24
+HARDWARE_FILTER_US = 500
+InputSignal = DiscreteSignal | AnalogSignal  # DEM 1.2-1 "500 microsecond filtering"
+
+
+@dataclass(frozen=True, slots=True)
+class Thresholds:
+    """IEC 61131-2 type 1: OFF at or below ``off_max``, ON at or above ``on_min`` (volts)."""
+
+    nominal: int
+    off_max: float
+    on_min: float
+    maximum: float
+
+    def judge(self, volts: float, previous: bool) -> bool:
+        if volts >= self.on_min:
+            return True
+        if volts <= self.off_max:
+            return False
+        return previous  # transition zone: undefined, the input keeps its state
+
+
+TYPE1_24V = Thresholds(24, 5.0, 15.0, 30.0)
+TYPE1_48V = Thresholds(48, 10.0, 34.0, 60.0)
+
+
+def check_channel(channel: int) -> int:
+    if isinstance(channel, bool) or not isinstance(channel, int) or not 0 <= channel < CHANNELS:
+        raise ConfigError(f"channel {channel!r} out of range (allowed 0..{CHANNELS - 1})")
+    return channel
+
+
+class _Channel:
+    __slots__ = ("edge_t", "level", "pending", "raw", "signal", "signal_handle", "stamp")
+
+    def __init__(self) -> None:
+        self.raw = False  # at the terminals
+        self.level = False  # after the filters
+        self.pending: Handle | None = None
+        self.edge_t = 0
+        self.stamp: int | None = None
+        self.signal: InputSignal | None = None
+        self.signal_handle: Handle | None = None
+
+
+Accept = Callable[[int, bool, int, int | None, int], None]  # channel, level, edge, stamp, now
+
+
+class InputBank:
+    """Raw levels, filters and accepted levels of the 24 channels."""
+
+    def __init__(
+        self,
+        clock: SimClock,
+        thresholds: Thresholds,
+        stamp: Callable[[int], int | None],
+        accept: Accept,
+    ) -> None:
+        self.clock = clock
+        self.thresholds = thresholds
+        self._stamp = stamp
+        self._accept = accept
+        self._ch = [_Channel() for _ in range(CHANNELS)]
+        self.active = False  # module operational and inputs readable
+        self.filter_us = HARDWARE_FILTER_US
+        self.supply_ok = True  # without field supply every input reads 0
+
+    def set_filter_ms(self, filt_ms: int) -> None:
+        self.filter_us = max(HARDWARE_FILTER_US, filt_ms * MS)
+
+    def raw(self, channel: int) -> bool:
+        return self._ch[channel].raw
+
+    def level(self, channel: int) -> bool:
+        return self._ch[channel].level
+
+    def levels(self) -> int:
+        return sum(int(c.level) << i for i, c in enumerate(self._ch))
+
+    # --- the terminals ------------------------------------------------------------
+
+    def set_raw(self, channel: int, value: bool, t: int) -> None:
+        ch = self._ch[channel]
+        if ch.raw == value:
+            return
+        ch.raw = value
+        self._edge(channel, t)
+
+    def set_value(self, channel: int, value: bool | float, t: int) -> None:
+        """A bool, or volts judged against the type 1 limits (7.2)."""
+        if isinstance(value, bool):
+            self.set_raw(channel, value, t)
+            return
+        if not isinstance(value, int | float) or value != value or abs(value) == float("inf"):
+            raise ConfigError(f"input {channel}: {value!r} is not a bool or a voltage")
+        self.set_raw(channel, self.thresholds.judge(float(value), self._ch[channel].raw), t)
+
+    def attach(self, channel: int, signal: InputSignal | None) -> None:
+        ch = self._ch[channel]
+        if ch.signal_handle is not None:
+            ch.signal_handle.cancel()
+            ch.signal_handle = None
+        ch.signal = signal
+        if signal is not None:
+            self._follow(channel, self.clock.now)
+
+    def _follow(self, channel: int, t: int) -> None:
+        ch = self._ch[channel]
+        assert ch.signal is not None
+        self.set_value(channel, ch.signal.value_at(t), t)  # volts at breakpoints only
+        nxt = ch.signal.next_change(t)
+        ch.signal_handle = (
+            None
+            if nxt is None
+            else self.clock.schedule(nxt, lambda now: self._follow(channel, now))
+        )
+
+    # --- the filters ----------------------------------------------------------------
+
+    def _effective(self, ch: _Channel) -> bool:
+        return ch.raw and self.supply_ok
+
+    def _edge(self, channel: int, t: int) -> None:
+        ch = self._ch[channel]
+        if ch.pending is not None:
+            ch.pending.cancel()  # a pulse shorter than the filter is rejected
+            ch.pending = None
+        if not self.active or self._effective(ch) == ch.level:
+            return
+        ch.edge_t, ch.stamp = t, self._stamp(t)  # stamped at the edge (manual-notes)
+        ch.pending = self.clock.schedule(
+            t + self.filter_us, lambda now: self._confirm(channel, now)
+        )
+
+    def _confirm(self, channel: int, now: int) -> None:
+        ch = self._ch[channel]
+        ch.pending = None
+        ch.level = self._effective(ch)
+        self._accept(channel, ch.level, ch.edge_t, ch.stamp, now)
+
+    def supply(self, ok: bool, t: int) -> None:
+        """Field supply on/off: every input high at the terminals follows it."""
+        self.supply_ok = ok
+        for channel, ch in enumerate(self._ch):
+            if ch.raw:
+                self._edge(channel, t)
+
+    def start(self, now: int, *, silent: bool) -> None:
+        """Inputs readable again (self-test done, terminal block back): take the levels."""
+        self.active = True
+        for channel, ch in enumerate(self._ch):
+            value = self._effective(ch)
+            if value != ch.level:
+                ch.level = value
+                if not silent:
+                    self._accept(channel, value, now, self._stamp(now), now)
+
+    def stop(self) -> None:
+        """Inputs unreadable (power off, terminal block out): cancel the filters."""
+        self.active = False
+        for ch in self._ch:
+            if ch.pending is not None:
+                ch.pending.cancel()
+                ch.pending = None
+
+    def reset_levels(self) -> None:
+        for ch in self._ch:
+            ch.level = False

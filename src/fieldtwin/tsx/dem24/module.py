@@ -1,0 +1,424 @@
+"""The TSX DEM 2412 / 2413 time-stamping module (the manual tsx-dem-24-time-stamping.txt).
+
+Sans-IO and event-driven: the module acts at input edges (from the signals' next
+change), at the ends of the input filters, at synchronization pulses, at the
+pulse-loss deadline, at oscillation checks and at periodic logging; nothing runs per
+PLC scan.  The Text Block requests live in :mod:`fieldtwin.tsx.dem24.requests`, the
+console and plant-file side and the two models in :mod:`fieldtwin.tsx.dem24.models`.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+from fieldtwin.clock import Handle, S
+from fieldtwin.errors import ConfigError
+from fieldtwin.tsx.dem24 import requests
+from fieldtwin.tsx.dem24.civil import CivilTime
+from fieldtwin.tsx.dem24.config import (
+    DEFAULT_CONFIG,
+    FB_CONFIG_REFUSED,
+    FB_STACK_FULL,
+    FB_SUPPLY,
+    FB_SYNC,
+    FB_TERMINAL,
+    Dem24Config,
+)
+from fieldtwin.tsx.dem24.inputs import (
+    CHANNELS,
+    TYPE1_24V,
+    InputBank,
+    InputSignal,
+    Thresholds,
+    check_channel,
+)
+from fieldtwin.tsx.dem24.oscillation import Detector
+from fieldtwin.tsx.dem24.oscillation import Thresholds as OscThresholds
+from fieldtwin.tsx.dem24.stack import (
+    CH_SUPPLY,
+    CH_SYNC,
+    CH_TERMINAL,
+    NEARLY_FULL,
+    STATE_OSCILLATING,
+    Message,
+    MessageStack,
+    MessageType,
+    change_body,
+    overall_body,
+)
+from fieldtwin.tsx.dem24.sync import SYNC_OUTPUT_MAX, PulseSource, announce
+from fieldtwin.tsx.dem24.timebase import SyncOutcome, Timebase
+from fieldtwin.tsx.module import FaultCategory, IntelligentModule, ModuleContext, ModuleState
+from fieldtwin.tsx.textblock import Exchange
+from fieldtwin.words import get_bit
+
+# Discrete input bits Ixy,i (DEM 2.4-2 reconstructed, AMB-DEM-01)
+I_READY, I_NOT_EMPTY, I_NEARLY_FULL, I_SATURATED, I_SYNC_FAULT, I_PULSE = 0, 1, 2, 3, 4, 7
+
+# OWxy,1 command bits (DEM 2.4-3, 4.2-1, AMB-DEM-03)
+OW1_STOP, OW1_PURGE, OW1_OVERALL = 0, 1, 2
+
+
+class Dem24Core(IntelligentModule):
+    """The time-stamping function; :class:`Dem24` adds the console and plant-file side."""
+
+    type_name: ClassVar[str] = "TSX DEM 24"
+    thresholds: ClassVar[Thresholds] = TYPE1_24V
+    fault_string_bytes = 12  # DEM 4.3: 96 bits
+    terminal_block_fault_bit = FB_TERMINAL
+
+    def __init__(
+        self,
+        ctx: ModuleContext,
+        rack: int,
+        slot: int,
+        *,
+        declared_code: int | None = None,
+        clock_drift_ppm: float = 0.0,
+    ) -> None:
+        super().__init__(ctx, rack, slot, declared_code=declared_code)
+        self.clock_drift_ppm = float(clock_drift_ppm)
+        self.config: Dem24Config = DEFAULT_CONFIG
+        self.default_config = True
+        self.diag_word = 0
+        self.timebase = Timebase(drift_ppm=self.clock_drift_ppm)
+        self.stack = MessageStack()
+        self.inputs = InputBank(self.clock, self.thresholds, self._stamp, self._accepted)
+        self.detectors: list[Detector] | None = None
+        self._osc_handles: list[Handle | None] = [None] * CHANNELS
+        self._loss: Handle | None = None
+        self._periodic: Handle | None = None
+        self.pulse_image = False
+        self.terminal_block = True  # fitted
+        self.supply = True  # external supply present
+        self.sync_outputs: list[Dem24Core] = []
+        self.pulse_source: PulseSource | None = None
+        self.plant_startup: list[Any] = []  # requests the plant file applies after self-test
+        self.edges_stamped = 0
+        for follower in announce(self.clock, self, rack, slot):
+            self.connect_sync_output(follower)  # type: ignore[arg-type]
+
+    # --- public API: inputs and pulses ------------------------------------------------
+
+    def set_input(self, channel: int, *args: Any, **kwargs: Any) -> None:
+        """``set_input(channel, value)``: a bool, or volts judged as IEC 61131-2 type 1."""
+        value = args[0] if args else kwargs.get("value")
+        if value is None:
+            raise ConfigError("set_input(channel, value): value missing (a bool or volts)")
+        self.inputs.set_value(check_channel(channel), value, self.clock.now)
+
+    def set_signal(self, channel: int, signal: InputSignal | None) -> None:
+        """Drive an input from a signal (bools, or volts judged at its breakpoints)."""
+        self.inputs.attach(check_channel(channel), signal)
+
+    def sync_pulse(self) -> None:
+        """One synchronization pulse on IN-SYN now."""
+        self.receive_pulse(self.clock.now)
+
+    def connect_sync_output(self, other: Dem24Core) -> None:
+        """Wire OUT-SYN to another module's IN-SYN (at most 32, DEM 7.2)."""
+        if len(self.sync_outputs) >= SYNC_OUTPUT_MAX:
+            raise ConfigError(
+                f"sync output of slot {self.address} already drives {SYNC_OUTPUT_MAX} modules"
+                " (allowed at most 32)"
+            )
+        if other is self or other in self.sync_outputs:
+            raise ConfigError(f"slot {other.address} cannot be wired twice or to itself")
+        self.sync_outputs.append(other)
+
+    def attach_pulse_source(self, period_us: int, start_us: int = 0) -> PulseSource:
+        """An external pulse generator on IN-SYN (replaces any previous one)."""
+        if self.pulse_source is not None:
+            self.pulse_source.stop()
+        self.pulse_source = PulseSource(self.clock, period_us, start_us, self.receive_pulse)
+        return self.pulse_source
+
+    def set_clock_drift(self, ppm: float) -> None:
+        """Make the module clock fast (> 0) or slow by ``ppm`` (DEM 7.2: within 25 ppm)."""
+        self.clock_drift_ppm = float(ppm)
+        self.timebase.clock.set_drift(self.clock_drift_ppm, self.clock.now)
+
+    def set_terminal_block(self, fitted: bool) -> None:
+        """Fit or remove the TSX BLK4 terminal block (DEM 4.3, 7.2 monitoring)."""
+        if fitted != self.terminal_block:
+            self.terminal_block = fitted
+            self._fault_input(FB_TERMINAL, CH_TERMINAL, not fitted)
+
+    def set_supply(self, present: bool) -> None:
+        """External 24/48 V supply of the inputs (DEM 3.2-1 AI EXT)."""
+        if present != self.supply:
+            self.supply = present
+            self.inputs.supply(present, self.clock.now)
+            if self.config.supply_monitoring:
+                self._fault_input(FB_SUPPLY, CH_SUPPLY, not present)
+
+    # --- the operating modes (base hooks) -------------------------------------------
+
+    def on_power_on(self, now: int) -> None:
+        # DEM 2.5-3: no protected memory, configuration and time are lost
+        self.config, self.default_config, self.diag_word = DEFAULT_CONFIG, True, 0
+        self.timebase = Timebase(drift_ppm=self.clock_drift_ppm)
+        self.stack = MessageStack()
+        self.detectors = None
+        self._osc_handles = [None] * CHANNELS
+        self.pulse_image = False
+        self.inputs.stop()
+        self.inputs.reset_levels()
+        self.inputs.set_filter_ms(0)
+
+    def on_self_test_done(self, now: int) -> None:
+        if not self.terminal_block:
+            self.set_fault(FB_TERMINAL, True)
+        self._update_reading(now, silent=True)
+        for action in self.plant_startup:
+            action(self, now)
+        self._refresh_words()
+
+    def on_power_off(self, now: int) -> None:
+        self.inputs.stop()
+
+    def on_outputs(self, old_ow: list[int], old_o: int, now: int) -> None:
+        old, new = old_ow[1], self.ow[1]
+        if get_bit(new, OW1_PURGE) and not get_bit(old, OW1_PURGE):
+            self.stack.purge()  # DEM 4.2-1 rising edge: purge the stack
+        if get_bit(new, OW1_OVERALL) and not get_bit(old, OW1_OVERALL):
+            self.log_overall(now)  # DEM 4.2-3 rising edge: log the overall state
+        self._refresh_words()
+
+    def fault_category_of(self, bit: int) -> FaultCategory:
+        if bit < 16:
+            return FaultCategory.BLOCKING
+        if bit in (FB_TERMINAL, FB_SUPPLY):
+            return FaultCategory.MODULE  # DEM 4.3 module/processor faults
+        return FaultCategory.APPLICATION
+
+    def handle_request(self, exchange: Exchange, now: int) -> None:
+        requests.handle(self, exchange, now)
+
+    # --- configuration ---------------------------------------------------------------
+
+    def apply_config(self, config: Dem24Config, now: int) -> None:
+        """A configuration accepted (DEM 3.4-3), or the default."""
+        self.config, self.default_config = config, False
+        self.diag_word = 0
+        self.awaiting_configuration = False
+        self.set_fault(FB_CONFIG_REFUSED, False)
+        self.timebase.t_syn_ms, self.timebase.drift_ms = config.t_syn_s * 1000, config.drift_ms
+        self.inputs.set_filter_ms(config.filt_ms)
+        for handle in self._osc_handles:
+            if handle is not None:
+                handle.cancel()
+        self._osc_handles = [None] * CHANNELS
+        self.detectors = None
+        if config.oscillation:
+            th = OscThresholds.from_config(
+                config.t_max_s, config.n_max, config.t_min_s, config.n_min
+            )
+            self.detectors = [Detector(th) for _ in range(CHANNELS)]
+        monitored = config.supply_monitoring and not self.supply
+        if monitored != self.fault_active(FB_SUPPLY):
+            self._fault_input(FB_SUPPLY, CH_SUPPLY, monitored)
+        self._start_periodic(now)
+        self.refresh_status()
+        self._refresh_words()
+
+    def refuse_config(self, diag_word: int) -> None:
+        """DEM 3.4-3: awaiting configuration, diagnostic bits, time-stamping stops."""
+        self.awaiting_configuration = True
+        self.diag_word = diag_word
+        self.set_fault(FB_CONFIG_REFUSED, True)
+        self._refresh_words()
+
+    # --- time -----------------------------------------------------------------------
+
+    def receive_pulse(self, now: int) -> None:
+        """IN-SYN pulse: repeated on OUT-SYN, then taken by the time base (DEM 4.1-3)."""
+        if self.state is ModuleState.OFF:
+            return
+        for other in self.sync_outputs:
+            other.receive_pulse(now)
+        if self.state is not ModuleState.OPERATIONAL:
+            return
+        self.pulse_image = not self.pulse_image  # DEM 2.4-2 note: Ixy,7 changes at each pulse
+        self._sync_outcome(self.timebase.pulse(now), now)
+        self._arm_loss()
+
+    def _arm_loss(self) -> None:
+        if self._loss is not None:
+            self._loss.cancel()
+            self._loss = None
+        deadline = self.timebase.loss_deadline()
+        if deadline is not None:
+            self._loss = self.call_at(deadline, self._pulse_lost)
+
+    def _pulse_lost(self, now: int) -> None:
+        self._loss = None
+        self._sync_outcome(self.timebase.pulse_lost(now), now)
+
+    def _sync_outcome(self, outcome: SyncOutcome, now: int) -> None:
+        if outcome.fault is not None:
+            self.set_fault(FB_SYNC, outcome.fault)  # DEM 4.3: application fault, ERR LED
+            self._log_change(CH_SYNC, int(outcome.fault), self._stamp(now))
+        if outcome.time_set:
+            self.log_overall(now)  # DEM 4.2-3: first message after the time is set
+            self._start_periodic(now)  # PER counted from the time setting
+        self._refresh_words()
+
+    def _start_periodic(self, now: int) -> None:
+        if self._periodic is not None:
+            self._periodic.cancel()
+            self._periodic = None
+        if self.config.periodic and self.state is not ModuleState.OFF:
+            period = self.config.per_min * 60 * S
+            self._periodic = self.call_later(period, self._periodic_log)
+
+    def _periodic_log(self, now: int) -> None:
+        self._periodic = None
+        self.log_overall(now)  # DEM 3.2-1 PER: overall state every PER minutes
+        self._start_periodic(now)
+
+    def _stamp(self, t: int) -> int | None:
+        return self.timebase.clock.ms(t) if self.timebase.ready else None
+
+    # --- inputs -------------------------------------------------------------------------
+
+    def _accepted(self, channel: int, level: bool, edge: int, stamp: int | None, now: int) -> None:
+        self.edges_stamped += 1
+        state = int(level)
+        detector = self.detectors[channel] if self.detectors is not None else None
+        if detector is not None:
+            if detector.transition(edge):
+                state = STATE_OSCILLATING  # DEM 2.3-3: shown to be oscillating
+            elif detector.oscillating:
+                state = -1  # DEM 2.3-3: its transitions are no longer indicated
+            self._schedule_osc_check(channel)
+        if state >= 0:
+            self._log_change(channel, state, stamp)
+        self._refresh_words()
+
+    def _schedule_osc_check(self, channel: int) -> None:
+        handle = self._osc_handles[channel]
+        if handle is not None:
+            handle.cancel()
+        assert self.detectors is not None
+        at = self.detectors[channel].next_check()
+        self._osc_handles[channel] = (
+            None if at is None else self.call_at(at, lambda now: self._osc_check(channel, now))
+        )
+
+    def _osc_check(self, channel: int, now: int) -> None:
+        self._osc_handles[channel] = None
+        assert self.detectors is not None
+        if self.detectors[channel].check(now):  # normal again: its state (AMB-DEM-11)
+            self._log_change(channel, int(self.inputs.level(channel)), self._stamp(now))
+            self._refresh_words()
+        else:
+            self._schedule_osc_check(channel)
+
+    def _readable(self) -> bool:
+        """Inputs read: terminal block fitted, monitored supply present (DEM 2.5-6)."""
+        return self.terminal_block and (self.supply or not self.config.supply_monitoring)
+
+    def _update_reading(self, now: int, *, silent: bool = False) -> None:
+        if self.state is not ModuleState.OPERATIONAL:
+            return
+        if self._readable() and not self.inputs.active:
+            self.inputs.start(now, silent=silent)
+        elif not self._readable() and self.inputs.active:
+            self.inputs.stop()
+
+    def _fault_input(self, bit: int, channel: int, active: bool) -> None:
+        now = self.clock.now
+        if self.state is ModuleState.OFF:
+            return
+        if self.state is ModuleState.OPERATIONAL:
+            self.set_fault(bit, active)
+            self._log_change(channel, int(active), self._stamp(now))  # AMB-DEM-19
+        self._update_reading(now)
+        self._refresh_words()
+
+    # --- logging -------------------------------------------------------------------------
+
+    @property
+    def logging(self) -> bool:
+        """Messages enter the stack (DEM 2.5-1, 3.4-3, 4.2-3 global stop)."""
+        return (
+            self.timebase.ready
+            and not self.awaiting_configuration
+            and not get_bit(self.ow[1], OW1_STOP)
+        )
+
+    def selected(self) -> int:
+        """Channels to time-stamp: OWxy,2 (0..15) and OWxy,3 bits 0..7 (DEM 3.2-2)."""
+        return self.ow[2] | ((self.ow[3] & 0xFF) << 16)
+
+    def _log(self, message_type: MessageType, stamp: int | None, body: Any) -> None:
+        if stamp is None or not self.logging or self.state is not ModuleState.OPERATIONAL:
+            return
+        message = Message(
+            message_type,
+            CivilTime.from_ms(stamp),
+            self.timebase.fault,
+            self.timebase.indicator,
+            self.rack,
+            self.slot,
+            body,
+        )
+        self.stack.push(message)
+        self.set_fault(FB_STACK_FULL, self.stack.full)
+
+    def _log_change(self, channel: int, state: int, stamp: int | None) -> None:
+        if channel < CHANNELS and not (self.selected() >> channel) & 1:
+            return  # DEM 3.2-2: channels not selected behave like discrete inputs
+        self._log(MessageType.CHANGE, stamp, change_body(channel, state))
+
+    def log_overall(self, now: int) -> None:
+        """A type 1 message: selection, oscillating channels, states, faults (DEM 4.2-2)."""
+        oscillating = 0
+        if self.detectors is not None:
+            oscillating = sum(int(d.oscillating) << i for i, d in enumerate(self.detectors))
+        faults = (
+            self.timebase.fault,
+            not self.terminal_block,
+            self.fault_active(FB_SUPPLY),
+        )
+        body = overall_body(self.selected(), oscillating, self.image(), faults)
+        self._log(MessageType.OVERALL, self._stamp(now), body)
+        self._refresh_words()
+
+    def read_messages(self, count: int) -> list[Message]:
+        """Remove and return up to ``count`` messages, oldest first (DEM 4.2-3)."""
+        messages = self.stack.pop(count)
+        self.set_fault(FB_STACK_FULL, self.stack.full)
+        self._refresh_words()
+        return messages
+
+    # --- words and bits ------------------------------------------------------------------
+
+    def image(self) -> int:
+        """IWxy,6/7: the inputs, or their fallback while unreadable (DEM 3.2-1 DEF)."""
+        if self._readable() or self.config.maintain:
+            return self.inputs.levels()
+        return 0
+
+    def _refresh_words(self) -> None:
+        if self.state is ModuleState.OFF:
+            return
+        ready = self.timebase.ready
+        count = len(self.stack)
+        iw2 = self.diag_word
+        iw2 |= int(not self.logging) << 0  # DEM 2.4-3 IWxy,2,0: 1 = no logging
+        iw2 |= int(ready) << 7
+        iw2 |= int(self.fault_active(FB_SUPPLY)) << 8
+        iw2 |= int(self.default_config) << 0xD
+        image = self.image()
+        self.iw[2], self.iw[5] = iw2, count
+        self.iw[6], self.iw[7] = image & 0xFFFF, image >> 16
+        self.i_bits = (
+            (int(ready) << I_READY)
+            | (int(count > 0) << I_NOT_EMPTY)
+            | (int(count >= NEARLY_FULL) << I_NEARLY_FULL)
+            | (int(self.stack.full) << I_SATURATED)
+            | (int(self.timebase.fault) << I_SYNC_FAULT)
+            | (int(self.pulse_image) << I_PULSE)
+        )
