@@ -1,0 +1,153 @@
+"""The one small transport interface every backend implements (DESIGN rule 5).
+
+A transport moves bytes, nothing else: it never blocks the simulation, never
+frames, never reads the simulated clock.  ``send`` queues what the kernel will
+not take at once and flushes it on the next ``send``, ``receive`` or ``flush``;
+``receive`` returns what has arrived (``b""`` when nothing has).
+
+Learned from python-can's bus/interface split and httpcore's thin adapters.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+from fieldtwin.errors import ConfigError, TransportError
+
+DATA_BITS = (7, 8)
+PARITIES = ("N", "E", "O")
+STOP_BITS = (1, 2)
+READ_CHUNK = 65536
+
+
+@dataclass(frozen=True, slots=True)
+class LineSettings:
+    """A serial line's character format: baud rate, data bits, parity, stop bits."""
+
+    baud: int = 9600
+    data_bits: int = 8
+    parity: str = "N"
+    stop_bits: int = 1
+
+    def __post_init__(self) -> None:
+        if isinstance(self.baud, bool) or not isinstance(self.baud, int) or self.baud <= 0:
+            raise ConfigError(f"line setting baud={self.baud!r}: allowed a whole number > 0")
+        if self.data_bits not in DATA_BITS:
+            raise ConfigError(f"line setting data_bits={self.data_bits!r}: allowed 7 or 8")
+        if self.parity not in PARITIES:
+            raise ConfigError(f"line setting parity={self.parity!r}: allowed N, E or O")
+        if self.stop_bits not in STOP_BITS:
+            raise ConfigError(f"line setting stop_bits={self.stop_bits!r}: allowed 1 or 2")
+
+    @property
+    def bits_per_char(self) -> int:
+        """1 start bit + data bits + the parity bit if any + stop bits."""
+        return 1 + self.data_bits + (0 if self.parity == "N" else 1) + self.stop_bits
+
+    def char_time_us(self) -> int:
+        """Time one character takes on the line, rounded to whole microseconds."""
+        return round(self.bits_per_char * 1_000_000 / self.baud)
+
+    def __str__(self) -> str:
+        return f"{self.baud} {self.data_bits}{self.parity}{self.stop_bits}"
+
+
+class Transport(Protocol):
+    """A byte pipe to one peer (see module docstring for the rules)."""
+
+    name: str
+    peer_path: str | None
+    is_real: bool
+    closed: bool
+
+    def send(self, data: bytes) -> None: ...
+
+    def receive(self) -> bytes: ...
+
+    def fileno(self) -> int | None: ...
+
+    def close(self) -> None: ...
+
+
+class Listener(Protocol):
+    """A listening socket: ``accept`` hands out connected transports."""
+
+    name: str
+    address: tuple[str, int]
+
+    def accept(self) -> Transport | None: ...
+
+    def fileno(self) -> int: ...
+
+    def close(self) -> None: ...
+
+
+@runtime_checkable
+class Flushable(Protocol):
+    """What our own transports add: bytes queued for the kernel, and a way to push them."""
+
+    @property
+    def pending_output(self) -> int: ...
+
+    def flush(self) -> None: ...
+
+
+class FdTransport:
+    """Shared body of the fd-backed transports (pty, serial): an output queue over os.write."""
+
+    is_real = True
+    peer_path: str | None = None
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self.closed = False
+        self._out = bytearray()
+
+    def __repr__(self) -> str:
+        state = "closed" if self.closed else "open"
+        return f"<{type(self).__name__} {self.name} {state}>"
+
+    @property
+    def pending_output(self) -> int:
+        return len(self._out)
+
+    def _check_open(self, what: str) -> None:
+        if self.closed:
+            raise TransportError(f"cannot {what} on {self.name}: it is closed")
+
+    def send(self, data: bytes) -> None:
+        """Queue ``data`` and write as much as the kernel takes now."""
+        self._check_open("send")
+        self._out += data
+        self.flush()
+
+    def flush(self) -> None:
+        """Write queued bytes until the kernel would block."""
+        out = self._out
+        while out and not self.closed:
+            try:
+                written = self._write(bytes(out[:READ_CHUNK]))
+            except BlockingIOError:
+                return
+            except OSError as exc:
+                self._broken(f"write failed: {exc}")
+            if written <= 0:
+                return
+            del out[:written]
+
+    def _broken(self, why: str) -> None:
+        self.close()
+        raise TransportError(f"{self.name}: {why}")
+
+    def _write(self, data: bytes) -> int:
+        raise NotImplementedError
+
+    def fileno(self) -> int | None:
+        raise NotImplementedError
+
+    def receive(self) -> bytes:
+        raise NotImplementedError
+
+    def close(self) -> None:
+        raise NotImplementedError

@@ -1,0 +1,87 @@
+"""A serial device through pyserial (a USB adapter, a real COM port, a pty slave).
+
+pyserial opens and configures the port (baud, data bits, parity, stop bits)
+with ``timeout=0``, so reads never block.  Writes go through ``os.write`` on
+the port's descriptor where it has one: pyserial 3.5's ``write`` with
+``write_timeout=0`` spins forever when the kernel buffer is full (it retries
+EAGAIN in a loop), which would freeze the simulation.
+"""
+
+from __future__ import annotations
+
+import os
+
+import serial as pyserial
+
+from fieldtwin.errors import TransportError
+from fieldtwin.transports.base import READ_CHUNK, FdTransport, LineSettings
+
+_PARITY = {"N": pyserial.PARITY_NONE, "E": pyserial.PARITY_EVEN, "O": pyserial.PARITY_ODD}
+_BYTESIZE = {7: pyserial.SEVENBITS, 8: pyserial.EIGHTBITS}
+_STOPBITS = {1: pyserial.STOPBITS_ONE, 2: pyserial.STOPBITS_TWO}
+
+
+class SerialTransport(FdTransport):
+    """A pyserial port, non-blocking both ways."""
+
+    def __init__(self, device: str, settings: LineSettings) -> None:
+        super().__init__(f"serial://{device}")
+        self.device = device
+        self.settings = settings
+        try:
+            self._port = pyserial.Serial(
+                device,
+                baudrate=settings.baud,
+                bytesize=_BYTESIZE[settings.data_bits],
+                parity=_PARITY[settings.parity],
+                stopbits=_STOPBITS[settings.stop_bits],
+                timeout=0,
+                write_timeout=0,
+            )
+        except (pyserial.SerialException, OSError, ValueError) as exc:
+            raise TransportError(f"cannot open serial device {device!r}: {exc}") from exc
+        self._fd: int | None = self._port_fd()
+
+    @property
+    def port(self) -> pyserial.Serial:
+        """The pyserial port itself (for modem lines, RS-485 settings, ...)."""
+        return self._port
+
+    def _port_fd(self) -> int | None:
+        try:
+            return int(self._port.fileno())
+        except (AttributeError, OSError, pyserial.SerialException):
+            return None  # a port without a descriptor: fall back to pyserial's write
+
+    def _write(self, data: bytes) -> int:
+        if self._fd is not None:
+            return os.write(self._fd, data)
+        try:
+            return int(self._port.write(data) or 0)
+        except pyserial.SerialTimeoutException:
+            return 0
+
+    def receive(self) -> bytes:
+        """What has arrived on the line; b"" if nothing; TransportError if the device went away."""
+        self._check_open("receive")
+        self.flush()
+        try:
+            return bytes(self._port.read(READ_CHUNK))
+        except (pyserial.SerialException, OSError) as exc:
+            self._broken(f"read failed: {exc}")
+            raise  # pragma: no cover - _broken always raises
+
+    def fileno(self) -> int | None:
+        return None if self.closed else self._fd
+
+    def close(self) -> None:
+        if self.closed:
+            return
+        self.closed = True
+        self._out.clear()
+        self._port.close()
+
+
+def open_serial(device: str, settings: LineSettings | None = None) -> SerialTransport:
+    """Open ``device`` (e.g. /dev/ttyUSB0, or a pty's peer_path) with ``settings``."""
+    return SerialTransport(device, settings or LineSettings())
