@@ -1,0 +1,156 @@
+"""What a channel's connector is wired to: an in-memory peer, a pty, a serial device, TCP.
+
+The in-memory peer lives in simulated time (its characters arrive at its own
+format and speed, so a peer with another format yields parity and format
+errors).  The real endpoints come from ``fieldtwin.transports`` and are pumped
+by the PLC's runner, which then paces simulated time to the wall clock.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from fieldtwin.clock import SimClock
+from fieldtwin.errors import ConfigError, TransportError
+from fieldtwin.tsx.scm.line import CharFormat, Line, Parity
+
+Deliver = Callable[[bytes, int, CharFormat | None, float | None], None]
+_PARITY = {"N": Parity.NONE, "O": Parity.ODD, "E": Parity.EVEN}
+
+
+class MemoryPeer:
+    """The far end of a channel wired to ``"memory"``: send to the module, receive from it."""
+
+    name = "memory"
+    peer_path: str | None = None
+    is_real = False
+
+    def __init__(self, clock: SimClock, deliver: Deliver) -> None:
+        self.closed = False
+        self.format: CharFormat | None = None  # None: the channel's own format and speed
+        self.baud: float | None = None
+        self.log: list[tuple[int, int]] = []  # (simulated time, byte) of what the module sent
+        self._clock = clock
+        self._deliver = deliver
+        self._inbox = bytearray()
+
+    def set_format(
+        self, data_bits: int = 8, parity: str = "N", stop_bits: int = 1, baud: float | None = None
+    ) -> None:
+        """Make the peer's UART differ from the channel's (SCM 6.3 parity / format faults)."""
+        if parity.upper() not in _PARITY:
+            raise ConfigError(f"peer parity {parity!r} not allowed (allowed N, O, E)")
+        self.format = CharFormat(data_bits, _PARITY[parity.upper()], stop_bits)
+        self.baud = baud
+
+    def send(self, data: bytes) -> None:
+        """Characters typed by the peer now (simulated time); they arrive at the peer's pace."""
+        if self.closed:
+            raise TransportError("cannot send on the memory peer: it is closed")
+        self._deliver(bytes(data), self._clock.now, self.format, self.baud)
+
+    def receive(self) -> bytes:
+        data = bytes(self._inbox)
+        self._inbox.clear()
+        return data
+
+    def fileno(self) -> int | None:
+        return None
+
+    def close(self) -> None:
+        self.closed = True
+
+    def from_module(self, data: bytes) -> None:
+        now = self._clock.now
+        self._inbox += data
+        self.log.extend((now, b) for b in data)
+
+
+@dataclass(slots=True)
+class Port:
+    """A channel's wiring."""
+
+    url: str
+    line: Line
+    peer: Any = None  # MemoryPeer or a Transport
+    listener: Any = None
+    runner: Any = None
+    path: str | None = None
+    connections: list[str] = field(default_factory=list)
+
+    def describe(self) -> str:
+        if self.listener is not None:
+            peer = self.peer.name if self.peer is not None and not self.peer.closed else "waiting"
+            return f"{self.path} ({peer})"
+        if self.path is not None:
+            return f"{self.url.split('?')[0]} {self.path}"
+        return self.url
+
+    def send(self, data: bytes) -> None:
+        peer = self.peer
+        if isinstance(peer, MemoryPeer):
+            peer.from_module(data)
+            return
+        if peer is None or peer.closed:
+            return  # nobody on the line: the characters are lost
+        with contextlib.suppress(TransportError):  # the peer went away: the line is open
+            peer.send(data)
+
+    def feed(self, data: bytes, now: int) -> None:
+        self.line.feed(data, now)
+
+    def close(self) -> None:
+        for item in (self.peer, self.listener):
+            if item is None:
+                continue
+            if self.runner is not None:
+                self.runner.detach(item)
+            item.close()
+        self.peer = self.listener = None
+
+
+def open_real(url: str, line: Line, runner: Any) -> Port:
+    """Open a pty, serial device or TCP listener for ``line`` and attach it to ``runner``."""
+    from fieldtwin.transports import listen, open_pty, open_serial, parse_endpoint
+    from fieldtwin.transports.base import LineSettings
+
+    endpoint = parse_endpoint(url)
+    port = Port(url, line, runner=runner)
+    fmt = line.fmt
+    settings = endpoint.settings or LineSettings(
+        line.baud, fmt.data_bits, fmt.parity.letter, fmt.stop_bits
+    )
+    if endpoint.scheme == "pty":
+        port.peer = open_pty(settings)
+        port.path = port.peer.peer_path
+        runner.attach(port.peer, port.feed)
+    elif endpoint.scheme == "serial":
+        assert endpoint.device is not None
+        port.peer = open_serial(endpoint.device, settings)
+        port.path = endpoint.device
+        runner.attach(port.peer, port.feed)
+    elif endpoint.scheme == "tcp":
+        assert endpoint.host is not None and endpoint.port is not None
+        port.listener = listen(endpoint.host, endpoint.port)
+        host, number = port.listener.address[:2]
+        port.path = f"tcp://{host}:{number}"
+        runner.attach_listener(port.listener, lambda t, now: _connected(port, t))
+    else:
+        raise ConfigError(
+            f"endpoint {url!r}: a SCM channel is wired to memory, pty, serial:///DEVICE"
+            " or tcp://HOST:PORT (raw characters)"
+        )
+    return port
+
+
+def _connected(port: Port, transport: Any) -> None:
+    """A TCP peer connected: it replaces the previous one (one peer per line)."""
+    if port.peer is not None:
+        port.runner.detach(port.peer)
+        port.peer.close()
+    port.peer = transport
+    port.connections.append(transport.name)
+    port.runner.attach(transport, port.feed)

@@ -1,0 +1,101 @@
+"""The ``[[module]]`` keys of a TSX SCM in a plant file.
+
+    [[module]]
+    type = "TSX SCM 2111"
+    slot = 2
+    adaptors = ["SCA1", "SCA1"]          # optional: override appendix 7.3
+    faults = ["loopback_ch1"]            # optional: injected at start
+    channels = [
+      { channel = 0, endpoint = "pty", signals = { CTS = 0 },
+        config = ["H'0802'", "H'9600'", 0, "H'1001'", "H'1000'", "H'0D00'", 0, 0] },
+    ]
+
+``config`` is the write-configuration table (8 or 9 words, SCM 3.2), applied as
+the request H'40' would be; a table the module would refuse is an error here.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
+
+from fieldtwin.errors import ConfigError
+from fieldtwin.tsx.scm import config as cfgmod
+from fieldtwin.tsx.scm.adaptors import Signals
+from fieldtwin.tsx.scm.variants import Adaptor
+from fieldtwin.words import parse_word, words_to_bytes
+
+if TYPE_CHECKING:
+    from fieldtwin.tsx.scm.module import ScmModule
+
+CHANNEL_KEYS = ("channel", "endpoint", "config", "signals")
+
+
+def configure_module(module: ScmModule, table: Mapping[str, Any], where: str) -> None:
+    rest = dict(table)
+    if "adaptors" in rest:
+        names = rest.pop("adaptors")
+        if not isinstance(names, list):
+            raise ConfigError(f"{where}.adaptors: a list of two adaptor names")
+        module.adaptors = module._adaptors([str(n) for n in names])
+        module.signals = [Signals(a) for a in module.adaptors]
+        module.channels = [module._channel(i, module.configs[i]) for i in (0, 1)]
+    for name in _list(rest.pop("faults", []), f"{where}.faults"):
+        try:
+            module.inject_fault(str(name), True)
+        except ConfigError as exc:
+            raise ConfigError(f"{where}.faults: {exc}") from None
+    channels = _list(rest.pop("channels", []), f"{where}.channels")
+    for index, entry in enumerate(channels):
+        _channel(module, entry, f"{where}.channels[{index}]")
+    if rest:
+        raise ConfigError(
+            f"{where}: unknown key(s) {', '.join(sorted(rest))} for {module.type_name}"
+            " (allowed: adaptors, faults, channels)"
+        )
+    module.changed()
+
+
+def _list(value: Any, where: str) -> list[Any]:
+    if not isinstance(value, list):
+        raise ConfigError(f"{where}: must be a list")
+    return value
+
+
+def _channel(module: ScmModule, entry: Any, where: str) -> None:
+    if not isinstance(entry, Mapping):
+        raise ConfigError(f'{where}: must be a table {{ channel = 0, endpoint = "pty" }}')
+    unknown = sorted(set(entry) - set(CHANNEL_KEYS))
+    if unknown:
+        raise ConfigError(f"{where}: unknown key(s) {unknown} (allowed: {', '.join(CHANNEL_KEYS)})")
+    channel = entry.get("channel")
+    if channel not in (0, 1):
+        raise ConfigError(f"{where}.channel: {channel!r} not allowed (allowed 0 or 1)")
+    if "config" in entry:
+        _config(module, channel, entry["config"], f"{where}.config")
+    for name, level in dict(entry.get("signals", {})).items():
+        try:
+            module.set_signal(channel, str(name), level)
+        except ConfigError as exc:
+            raise ConfigError(f"{where}.signals: {exc}") from None
+    if "endpoint" in entry:
+        try:
+            module.attach(channel, str(entry["endpoint"]))
+        except ConfigError as exc:
+            raise ConfigError(f"{where}.endpoint: {exc}") from None
+
+
+def _config(module: ScmModule, channel: int, value: Any, where: str) -> None:
+    words = [parse_word(str(v)) if isinstance(v, str) else int(v) for v in _list(value, where)]
+    fd_allowed = channel == 1 and module.variant.full_duplex_ch1
+    try:
+        config = cfgmod.decode(words_to_bytes(words), channel, fd_allowed)
+        other = module.configs[1 - channel]
+        if other is not None and cfgmod.speed_conflict(config.baud, other.baud):
+            raise cfgmod.Refused("speed restriction with the other channel (SCM 3.2)")
+    except cfgmod.Refused as exc:
+        raise ConfigError(f"{where}: the module would refuse this table: {exc}") from None
+    module.apply_config(channel, config, module.clock.now)
+
+
+__all__ = ["Adaptor", "configure_module"]

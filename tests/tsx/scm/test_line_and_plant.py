@@ -1,0 +1,73 @@
+"""The UART model (SCM 3.2 formats and timing) and the plant-file keys of an SCM."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from fieldtwin.errors import ConfigError
+from fieldtwin.plant import load_plant
+from fieldtwin.tsx.scm.line import ALLOWED_FORMATS, CharFormat, Parity, char_time_us, decode_stream
+
+EXAMPLE = Path(__file__).resolve().parents[3] / "examples" / "scm.toml"
+FORMATS = sorted(ALLOWED_FORMATS, key=str)
+
+
+@given(st.binary(min_size=1, max_size=40), st.sampled_from(FORMATS))
+def test_same_format_reads_back_exactly(data: bytes, fmt: CharFormat) -> None:
+    chars = decode_stream(data, fmt, 9600, fmt, 9600)
+    assert bytes(c.value for c in chars) == bytes(b & fmt.mask for b in data)
+    assert not any(c.parity_error or c.format_error for c in chars)
+    assert chars[-1].offset_us == round(len(data) * fmt.bits * 1e6 / 9600)
+
+
+@given(st.binary(min_size=1, max_size=20), st.sampled_from(FORMATS), st.sampled_from(FORMATS))
+def test_any_pair_of_formats_decodes_without_crashing(
+    data: bytes, sender: CharFormat, receiver: CharFormat
+) -> None:
+    chars = decode_stream(data, sender, 9600, receiver, 9600)
+    assert all(0 <= c.value <= receiver.mask for c in chars)
+
+
+def test_7e1_sender_to_8n1_receiver_gets_the_parity_bit_as_bit_7() -> None:
+    chars = decode_stream(b"A", CharFormat(7, Parity.EVEN, 1), 9600, CharFormat(8), 9600)
+    assert [c.value for c in chars] == [0x41]  # 'A' has an even number of 1s: parity bit 0
+    chars = decode_stream(b"C", CharFormat(7, Parity.EVEN, 1), 9600, CharFormat(8), 9600)
+    assert [c.value for c in chars] == [0xC3]
+
+
+def test_character_times() -> None:
+    assert char_time_us(CharFormat(8, Parity.NONE, 2), 9600) == 1146  # 11 bits
+    assert char_time_us(CharFormat(7, Parity.EVEN, 1), 75) == 133_333  # 10 bits
+
+
+def test_example_plant_wires_a_pty_and_configures_channel_0() -> None:
+    plant = load_plant(EXAMPLE)
+    assert plant.plc is not None
+    mod = plant.plc.module(0, 7)
+    assert mod.ports[0].path.startswith("/dev/") and mod.ports[0].path in mod.status()["channel 0"]
+    assert mod.configs[0].baud == 9600 and mod.configs[1].full_duplex  # kept through self-test
+    mod.detach(0)
+    plant.plc.advance(1.1)  # unpaced again once the pty is gone
+    assert plant.plc.read("IW7,1,3") == 1 and plant.plc.read("IW7,1,B") == 1
+
+
+def test_plant_errors_name_the_field(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.toml"
+    bad.write_text(
+        '[[module]]\ntype = "TSX SCM 2011"\nslot = 3\n'
+        "channels = [{ channel = 0, config = [\"H'0702'\", \"H'9600'\", 0, 0, 0, 0, 0, 0] }]\n"
+    )
+    with pytest.raises(ConfigError, match=r"module\[0\]\.channels\[0\]\.config"):
+        load_plant(bad)
+    bad.write_text('[[module]]\ntype = "TSX SCM 2011"\nslot = 3\nwires = 1\n')
+    with pytest.raises(ConfigError, match="wires"):
+        load_plant(bad)
+    bad.write_text('[[module]]\ntype = "TSX SCM 2011"\nslot = 3\nfaults = ["loopback_ch0"]\n')
+    plc = load_plant(bad).plc
+    assert plc is not None
+    plc.advance(1.1)
+    assert plc.read("IW3,0,6") == 1
