@@ -246,7 +246,13 @@ class Console:
                 raise ConfigError(f"signal: {pair!r} is not key=value")
             spec[key] = _value(value)
         where = f"signal {args[0]} {args[1]}"
-        module.set_signal(_channel(args[1]), signal_from_spec(spec, where=where))
+        built = signal_from_spec(spec, where=where)
+        try:
+            module.set_signal(_channel(args[1]), built)
+        except TypeError:
+            raise ConfigError(
+                f"{module.type_name} takes no input signals (see its page for 'input')"
+            ) from None
         return [f"signal {module.address} {args[1]} = {args[2]}"]
 
     def _fault(self, args: list[str]) -> list[str]:

@@ -91,3 +91,51 @@ def test_default_plant_in_the_console() -> None:
     lines = done.stdout.splitlines()
     assert lines[:3] == ["t = 12.000 s", "IW5,0,C = 1", "IW5,2,D = 0"]
     assert "leds: OK=on ERR=off F=off" in lines
+
+
+def test_run_serves_the_scm_on_a_pty_that_a_peer_types_into() -> None:
+    """`fieldtwin run` in real time; a pyserial peer types into the full-duplex channel."""
+    import re
+    import select
+    import time
+
+    import serial
+
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "fieldtwin", "run", "--no-live", "--status-every", "0.2"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=ROOT,
+    )
+    assert proc.stdout is not None
+    try:
+        paths: dict[str, str] = {}
+        deadline = time.monotonic() + 30
+        seen = ""
+        peer = None
+        while time.monotonic() < deadline:
+            ready, _, _ = select.select([proc.stdout], [], [], 0.5)
+            if not ready:
+                continue
+            line = proc.stdout.readline()
+            seen += line
+            match = re.match(r"listening: TSX SCM 2111 slot 7 channel (\d) pty (\S+)", line)
+            if match:
+                paths[match.group(1)] = match.group(2)
+            if peer is None and "running" in line:
+                assert set(paths) == {"0", "1"}, seen
+                peer = serial.Serial(paths["1"], baudrate=9600, timeout=1)
+            if peer is not None and "TSX SCM 2111: operational" in line and "typed" not in seen:
+                peer.write(b"OK")
+                seen += "typed\n"
+            if "typed" in seen and re.search(r"SCM 2111: .* IW \S+ \S+ \S+ H'004B' H'0002'", line):
+                break
+        else:
+            raise AssertionError(f"the typed characters never showed in IW7,3/IW7,4:\n{seen}")
+        if peer is not None:
+            peer.close()
+    finally:
+        proc.terminate()
+        proc.wait(timeout=10)
+    assert proc.returncode == 0

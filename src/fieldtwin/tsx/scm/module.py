@@ -448,6 +448,17 @@ class ScmModule(IntelligentModule):
             return
         super().inject_fault(name, active)
 
+    def endpoint_lines(self) -> list[str]:
+        """One line per channel wired to a real endpoint, for `fieldtwin run`."""
+        lines = []
+        for index, port in enumerate(self.ports):
+            if port is not None and port.url != "memory":
+                lines.append(
+                    f"listening: {self.type_name} slot {self.address} channel {index}"
+                    f" {port.describe()}"
+                )
+        return lines
+
     def status_details(self) -> dict[str, str]:
         lines = {}
         for index, channel in enumerate(self.channels):
