@@ -47,7 +47,10 @@ faults = ["sensor"]
     [
         ("[plc]\nmodel = 'TSX 99'", "plant.toml: plc.model: 'TSX 99' not allowed (allowed: TSX"),
         ("[plc]\nscan_ms = 0", "plant.toml: plc.scan_ms: 0 not allowed (allowed 1..1000 ms)"),
-        ("[plc]\nspeed = 3", "plant.toml: plc: unknown key(s) speed (allowed: model, scan_ms, outputs)"),
+        (
+            "[plc]\nspeed = 3",
+            "plant.toml: plc: unknown key(s) speed (allowed: model, scan_ms, outputs)",
+        ),
         ("[plcs]\n", "plant.toml: unknown top-level key(s) plcs (allowed: plant, plc, module"),
         ("[[module]]\nslot = 3", "plant.toml: module[0].type: missing or not a string"),
         (f"[[module]]\ntype = '{DOUBLE}'", "plant.toml: module[0].slot: missing"),

@@ -109,7 +109,7 @@ def test_discrete_bits_every_cycle_and_outputs() -> None:
     plc.write("O3,3", 1)
     plc.advance(0.01)
     assert mod.o_bits == 0b1000 and plc.read("O3,3") == 1
-    with pytest.raises(ConfigError, match="discrete outputs O,0..O,3"):
+    with pytest.raises(ConfigError, match=r"discrete outputs O,0\.\.O,3"):
         plc.write("O3,4", 1)
     with pytest.raises(ConfigError, match="is an input"):
         plc.write("IW3,0", 1)
@@ -182,7 +182,7 @@ def test_direct_table_receives_the_words() -> None:
 
 def test_exchange_bound() -> None:
     plc, _ = make()
-    with pytest.raises(ExchangeTimeout, match="not ended after 1.0 simulated seconds"):
+    with pytest.raises(ExchangeTimeout, match=r"not ended after 1\.0 simulated seconds"):
         plc.exchange(m=m_of(3), c=0x02, timeout_s=1.0)
 
 
