@@ -543,6 +543,10 @@ class IntelligentModule:
                 self.on_exchange_cancelled(exchange, now)
                 exchange.complete(Answer.fault(ERR_CANCELLED), now)
 
+    def cancel_exchange(self, exchange: Exchange, now: int) -> None:
+        """A Text Block's reset input cancels this one exchange."""
+        self.reset_exchanges(now, exchange.request.channel)
+
     def on_exchange_cancelled(self, exchange: Exchange, now: int) -> None:
         """An exchange is about to be cancelled: stop what it started."""
 

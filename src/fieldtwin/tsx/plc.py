@@ -135,6 +135,7 @@ class TextBlock:
     ticket: object = field(default=None, repr=False)
     table: int | None = None
     indirect: int | None = None
+    recv_table: int | None = None
 
     @property
     def done(self) -> bool:
@@ -433,22 +434,24 @@ class Plc:
         txt: int = 0,
         table: int | None = None,
         indirect: int | None = None,
+        recv_table: int | None = None,
     ) -> TextBlock:
         """Set a Text Block's inputs and start it; it is validated at the end of the task.
 
         ``send``/``send_bytes`` give the transmission table directly; or ``table``
         names it in the internal words (W100 -> 100, direct addressing) or
-        ``indirect`` names a word that holds the table's address.  With a table, the
-        received words are written there too.
+        ``indirect`` names a word that holds the table's address.  The received
+        words go to ``recv_table`` (W1000 -> 1000) when given, else to the table.
         """
         tb = self.text_block(txt)
         if tb.state in (TxtState.STARTED, TxtState.IN_MODULE, TxtState.ANSWERED):
             raise ConfigError(
                 f"TXT{txt} is busy ({tb.state.value}); reset it or wait for TXT{txt},D"
             )
-        if table is not None and not 0 <= table < DATA_WORDS:
-            raise ConfigError(f"table W{table} out of range (allowed W0..W{DATA_WORDS - 1})")
-        tb.table, tb.indirect = table, indirect
+        for given in (table, recv_table):
+            if given is not None and not 0 <= given < DATA_WORDS:
+                raise ConfigError(f"table W{given} out of range (allowed W0..W{DATA_WORDS - 1})")
+        tb.table, tb.indirect, tb.recv_table = table, indirect, recv_table
         if send is None and send_bytes is None and (table is not None or indirect is not None):
             send = self._table_words(table, indirect, length)
         data = send_bytes if send_bytes is not None else words_to_bytes(send or [])
@@ -485,7 +488,7 @@ class Plc:
         if tb.state is TxtState.IN_MODULE and tb.exchange is not None:
             entry = self._slot_for(tb.m)
             if entry is not None:
-                entry.module.reset_exchanges(self.clock.now, tb.exchange.request.channel)
+                entry.module.cancel_exchange(tb.exchange, self.clock.now)
         tb.answer = Answer.fault(ERR_CANCELLED)
         self._finish(tb, self.clock.now)
 
@@ -501,6 +504,7 @@ class Plc:
         txt: int = 0,
         table: int | None = None,
         indirect: int | None = None,
+        recv_table: int | None = None,
         timeout_s: float = 1200.0,
     ) -> ExchangeResult:
         """Start a Text Block exchange and run the simulation until it ends."""
@@ -514,6 +518,7 @@ class Plc:
             txt=txt,
             table=table,
             indirect=indirect,
+            recv_table=recv_table,
         )
         if not self._run_until(lambda: tb.done, seconds(timeout_s)) or tb.result is None:
             raise ExchangeTimeout(
@@ -575,7 +580,9 @@ class Plc:
             result = ExchangeResult(answer.v, ERR_TOO_LONG, True, b"", name, now)
         else:
             result = ExchangeResult(answer.v, len(answer.data), False, answer.data, name, now)
-            start = self._resolve_table(tb.table, tb.indirect)
+            start = tb.recv_table
+            if start is None:
+                start = self._resolve_table(tb.table, tb.indirect)
             words = result.words
             if start is not None and words:
                 end = min(start + len(words), DATA_WORDS)

@@ -28,7 +28,9 @@ def fd(words: list[int] | None = None) -> tuple[Plc, Any, MemoryPeer]:
 def read(plc: Plc, count: int, timeout_bcd: int = 0, capacity: int = 254) -> Any:
     # SCM 4.6 SR7: W1130 = time-out, W1131 = count, TXT0 receives at W1000
     plc.data[1130:1132] = [timeout_bcd, count]
-    return plc.start_exchange(m=M1, c=0x07, table=1130, length=4, recv_bytes=capacity, txt=0)
+    return plc.start_exchange(
+        m=M1, c=0x07, table=1130, length=4, recv_bytes=capacity, txt=0, recv_table=1000
+    )
 
 
 def write(plc: Plc, text: bytes) -> Any:
@@ -54,12 +56,27 @@ def test_4_6_full_duplex_example() -> None:
     plc.advance(0.03)
     assert rx.result is not None and (rx.result.v, rx.result.s) == (0, 5)
     assert rx.result.data == b"12345"  # 1st character in the low byte
-    assert plc.data[1130:1133] == [0x3231, 0x3433, 0x0035]  # the Plc writes back to the table
+    assert plc.data[1000:1003] == [0x3231, 0x3433, 0x0035]  # TXT0's reception table W1000
     rx = read(plc, 5, 0x0100)
     plc.advance(9.9)
     assert not rx.done
     plc.advance(0.2)
     assert rx.result is not None and rx.result.v == 253  # SR7: "Time-out? IF [TXT0,V=253]"
+
+
+def test_text_block_reset_cancels_only_its_own_side() -> None:
+    # SCM 4.5 code 1: the read's Text Block is reset while a write runs on the same channel
+    plc, mod, peer = fd()
+    rx = read(plc, 5, 0x0100)
+    plc.advance(0.02)
+    tx = write(plc, b"HELLO OPERATOR HELLO OPERATOR")
+    plc.advance(0.012)
+    plc.reset_text_block(0)
+    assert rx.result is not None and rx.result.e and rx.result.s == 1
+    plc.advance(0.05)
+    assert tx.result is not None and not tx.result.e and tx.result.v == 0
+    assert peer.receive() == b"HELLO OPERATOR HELLO OPERATOR"
+    assert plc.read("IW2,1,9") == 0  # no reception running any more
 
 
 def test_4_4_buffer_fills_from_the_configuration_on() -> None:

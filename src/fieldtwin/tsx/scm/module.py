@@ -262,6 +262,18 @@ class ScmModule(IntelligentModule):
         super().reset_exchanges(now, channel)
         self.changed()
 
+    def cancel_exchange(self, exchange: Exchange, now: int) -> None:
+        """A Text Block reset: on a full-duplex channel, only that side (read or write)."""
+        index = exchange.request.channel
+        if index in (0, 1) and isinstance(self.channels[index], FullDuplexChannel):
+            write = self._exchanges.get(WRITE_KEY) is exchange
+            for job in self.channels[index].abort(now, write, not write):
+                job.complete(Answer.fault(ERR_CANCELLED), now)
+            exchange.complete(Answer.fault(ERR_CANCELLED), now)
+            self.changed()
+            return
+        super().cancel_exchange(exchange, now)
+
     # --- the message interface -----------------------------------------------------
 
     def submit(self, request: Request, now: int, on_done: Any) -> Exchange:
