@@ -1,0 +1,205 @@
+"""``[[tes]]`` tables of a plant file -> TES devices, and their Modbus endpoints.
+
+    [[tes]]
+    model = "TES 8EA"                      # fixed keys: model, slave, endpoint
+    slave = 3
+    endpoint = "rtu+tcp://127.0.0.1:5021"  # several TES naming one RTU endpoint share a line
+    name = "boiler"                        # the EEPROM's name in the store (optional)
+    store = "eeprom.db"                    # SQLite parameter store (default: in memory)
+    prm_jumper = false                     # true: factory settings, slave 1 (§3.1.2)
+    link = "rs485"                         # which TES port an RTU endpoint is (rs485, rs232)
+    inputs = { 0 = true, a2 = 4.5, a3 = { kind = "square", low = 1.0, high = 9.0, period_s = 2 } }
+    faults = { short = [3], open = [7], not_ready_ms = 2, powered = true }
+
+Errors name the file and the field path: ``plant.toml: tes[1].slave: ...``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from fieldtwin.clock import MS, SimClock
+from fieldtwin.errors import ConfigError
+from fieldtwin.modbus.model import Link
+from fieldtwin.signals import analog_from_spec, discrete_from_spec
+from fieldtwin.tes.model import Tes
+from fieldtwin.tes.models import model_named
+from fieldtwin.transports.url import Endpoint, parse_endpoint
+
+KEYS = ("model", "slave", "endpoint", "name", "store", "prm_jumper", "link", "inputs", "faults")
+FAULT_KEYS = ("short", "open", "not_ready_ms", "powered")
+LINKS = {"rs485": Link.RS485, "rs232": Link.RS232}
+
+
+def build_tes(
+    tables: Sequence[Mapping[str, Any]], clock: SimClock, where: str, base_dir: Path
+) -> list[Tes]:
+    """Validate every ``[[tes]]`` table and build its TES on ``clock``."""
+    built = [_build(table, clock, f"{where}: tes[{i}]", base_dir) for i, table in enumerate(tables)]
+    _check_lines(built, tables, where)
+    return built
+
+
+def _build(table: Mapping[str, Any], clock: SimClock, at: str, base_dir: Path) -> Tes:
+    if not isinstance(table, Mapping):
+        raise ConfigError(f"{at}: not a table (allowed keys: {', '.join(KEYS)})")
+    unknown = sorted(set(table) - set(KEYS))
+    if unknown:
+        raise ConfigError(f"{at}: unknown key(s) {', '.join(unknown)} (allowed: {', '.join(KEYS)})")
+    model = _model(table, at)
+    slave = _slave(table.get("slave", 1), f"{at}.slave")
+    endpoint_of(table, at)
+    link_of(table, at)
+    store = table.get("store")
+    if store is not None and not isinstance(store, str):
+        raise ConfigError(f"{at}.store: {store!r} is not a file path")
+    prm = table.get("prm_jumper", False)
+    if not isinstance(prm, bool):
+        raise ConfigError(f"{at}.prm_jumper: {prm!r} not allowed (allowed: true, false)")
+    name = table.get("name")
+    if name is not None and not isinstance(name, str):
+        raise ConfigError(f"{at}.name: {name!r} is not a string")
+    path = None if store is None else base_dir / store
+    try:
+        tes = Tes(model, slave, clock=clock, store=path, prm_jumper=prm, name=name)
+    except ConfigError as exc:
+        raise ConfigError(f"{at}: {exc}") from None
+    _inputs(tes, table.get("inputs", {}), f"{at}.inputs", base_dir)
+    _faults(tes, table.get("faults", {}), f"{at}.faults")
+    return tes
+
+
+def _model(table: Mapping[str, Any], at: str) -> str:
+    if "model" not in table:
+        raise ConfigError(f"{at}.model: missing (allowed: TES 16EST, TES 8EA, ...)")
+    try:
+        return model_named(str(table["model"])).name
+    except ConfigError as exc:
+        raise ConfigError(f"{at}.model: {exc}") from None
+
+
+def _slave(value: object, at: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 247:
+        raise ConfigError(f"{at}: {value!r} out of range (allowed 1..247)")
+    return value
+
+
+def endpoint_of(table: Mapping[str, Any], at: str) -> Endpoint:
+    url = table.get("endpoint")
+    if not isinstance(url, str):
+        raise ConfigError(f"{at}.endpoint: missing or not a string (e.g. tcp://127.0.0.1:5020)")
+    try:
+        endpoint = parse_endpoint(url)
+    except ConfigError as exc:
+        raise ConfigError(f"{at}.endpoint: {exc}") from None
+    if endpoint.scheme == "memory":
+        raise ConfigError(
+            f"{at}.endpoint: 'memory' is for tests (allowed: tcp, rtu+tcp, pty, serial)"
+        )
+    return endpoint
+
+
+def link_of(table: Mapping[str, Any], at: str) -> Link:
+    name = table.get("link", "rs485")
+    if name not in LINKS:
+        raise ConfigError(f"{at}.link: {name!r} not allowed (allowed: rs485, rs232)")
+    return LINKS[name]
+
+
+def _inputs(tes: Tes, inputs: object, at: str, base_dir: Path) -> None:
+    if not isinstance(inputs, Mapping):
+        raise ConfigError(f"{at}: not a table (e.g. {{ 0 = true, a2 = 4.5 }})")
+    for key, spec in inputs.items():
+        field = f"{at}.{key}"
+        text = str(key).strip().lower()
+        analog = text.startswith("a")
+        number = text[1:] if analog else text
+        if not number.isdigit():
+            raise ConfigError(f"{field}: not an input (allowed 0..31 digital, a0..a7 analog)")
+        try:
+            if analog:
+                tes.set_signal(
+                    int(number), analog_from_spec(spec, where=field, base_dir=base_dir), False
+                )
+            else:
+                tes.set_signal(
+                    int(number), discrete_from_spec(spec, where=field, base_dir=base_dir), True
+                )
+        except ConfigError as exc:
+            raise ConfigError(
+                exc.args[0] if str(exc).startswith(field) else f"{field}: {exc}"
+            ) from None
+
+
+def _faults(tes: Tes, faults: object, at: str) -> None:
+    if not isinstance(faults, Mapping):
+        raise ConfigError(f"{at}: not a table (allowed keys: {', '.join(FAULT_KEYS)})")
+    unknown = sorted(set(faults) - set(FAULT_KEYS))
+    if unknown:
+        raise ConfigError(
+            f"{at}: unknown key(s) {', '.join(unknown)} (allowed: {', '.join(FAULT_KEYS)})"
+        )
+    for wiring in ("short", "open"):
+        for i in _int_list(faults.get(wiring, []), f"{at}.{wiring}"):
+            try:
+                tes.set_wiring(i, wiring)
+            except ConfigError as exc:
+                raise ConfigError(f"{at}.{wiring}: {exc}") from None
+    window = faults.get("not_ready_ms", 0)
+    if isinstance(window, bool) or not isinstance(window, int | float) or not 0 <= window < 100:
+        raise ConfigError(f"{at}.not_ready_ms: {window!r} not allowed (allowed 0..<100 ms)")
+    tes.not_ready_window_us = round(window * MS)
+    powered = faults.get("powered", True)
+    if not isinstance(powered, bool):
+        raise ConfigError(f"{at}.powered: {powered!r} not allowed (allowed: true, false)")
+    if not powered:
+        tes.power_off()
+
+
+def _int_list(value: object, at: str) -> list[int]:
+    if not isinstance(value, list) or not all(
+        isinstance(v, int) and not isinstance(v, bool) for v in value
+    ):
+        raise ConfigError(f"{at}: {value!r} is not a list of input numbers")
+    return list(value)
+
+
+def _check_lines(built: list[Tes], tables: Sequence[Mapping[str, Any]], where: str) -> None:
+    """Two TES answering the same number on one line would both reply."""
+    seen: dict[tuple[str, int], int] = {}
+    for i, (tes, table) in enumerate(zip(built, tables, strict=True)):
+        key = (str(endpoint_of(table, f"{where}: tes[{i}]")), tes.slave_for(link_of(table, "")))
+        if key in seen:
+            raise ConfigError(
+                f"{where}: tes[{i}].slave: {key[1]} already answers on {key[0]} (tes[{seen[key]}])"
+            )
+        seen[key] = i
+
+
+# --- endpoints ---------------------------------------------------------------
+
+
+def start_tes_endpoints(
+    tes_list: Sequence[Tes], tables: Sequence[Mapping[str, Any]], runner: Any
+) -> list[Any]:
+    """Group the TES by endpoint and serve each group (``fieldtwin run`` prints describe())."""
+    from fieldtwin.tes.serve import serve_group
+
+    groups: dict[str, list[int]] = {}
+    for i, table in enumerate(tables):
+        groups.setdefault(str(endpoint_of(table, f"tes[{i}]")), []).append(i)
+    servers = []
+    try:
+        for url, members in groups.items():
+            first = tables[members[0]]
+            link = link_of(first, f"tes[{members[0]}]")
+            servers.append(
+                serve_group(runner, parse_endpoint(url), [tes_list[i] for i in members], link)
+            )
+    except BaseException:
+        for server in servers:
+            server.close()
+        raise
+    return servers

@@ -1,0 +1,64 @@
+"""What a TES keeps in RAM besides its I/O: status word, MP words, link counters.
+
+Status-word bits per map (§6.2.1, §6.3.1, §6.4.1; AMB-TES-09).
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+
+from fieldtwin.modbus.model import Counter, Link
+from fieldtwin.tes.models import Family
+
+POWER_ON = 1 << 0  # bit 0: 24 V power on
+FALLBACK = 1 << 1  # bit 1: fallback, the master stopped asking
+SAFETY = 1 << 2  # bit 2: TES 32ET-S wiring default (short or open circuit)
+MEMORIZED = 1 << 3  # bit 3: memorized changes wait to be read (TES-managed)
+LOW_ALARM = 1 << 6  # bit 6: an analog input under its low threshold
+HIGH_ALARM = 1 << 7  # bit 7: an analog input over its high threshold
+
+# Bits the master resets by writing 0 to them.
+MASTER_RESETS = {
+    Family.DIGITAL_INPUTS: POWER_ON | FALLBACK | SAFETY,
+    Family.DIGITAL_OUTPUTS: POWER_ON | FALLBACK,
+    Family.ANALOG: POWER_ON | FALLBACK | LOW_ALARM | HIGH_ALARM,
+}
+
+COUNTER_ORDER = (
+    Counter.EXCEPTION_REPLIES,
+    Counter.NOT_READY_REPLIES,
+    Counter.FRAMES_EXECUTED,
+    Counter.CRC_ERRORS,
+    Counter.WRONG_CHARACTERS,
+    Counter.GOOD_FRAMES,
+    Counter.NO_SILENCE,
+)
+
+
+def link_key(link: Link) -> str:
+    """The TES counts RS-232 apart; TCP stands in for the RS-485 bus (see docs/tes.md)."""
+    return "rs232" if link is Link.RS232 else "rs485"
+
+
+class LineFault(enum.Enum):
+    """Line errors the line glue can be asked to produce on the next frames."""
+
+    BAD_CRC = "bad_crc"
+    BROKEN_CHARACTER = "broken_character"
+
+
+@dataclass(slots=True)
+class LinkCounters:
+    """§6.2.3.2 diagnosis counters of one link (16-bit, wrapping)."""
+
+    values: list[int] = field(default_factory=lambda: [0] * len(COUNTER_ORDER))
+    not_ready_owed: bool = False  # the last answer was "not ready": count it as such
+
+    def bump(self, counter: Counter) -> None:
+        if counter is Counter.EXCEPTION_REPLIES and self.not_ready_owed:
+            counter = Counter.NOT_READY_REPLIES
+        if counter in (Counter.EXCEPTION_REPLIES, Counter.NOT_READY_REPLIES):
+            self.not_ready_owed = False
+        i = COUNTER_ORDER.index(counter)
+        self.values[i] = (self.values[i] + 1) & 0xFFFF
