@@ -17,27 +17,17 @@ the SimClock it is given, and the PLC drives the bus by calling
 
 from __future__ import annotations
 
-import enum
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, ClassVar
 
 from fieldtwin.clock import Handle as ClockHandle
-from fieldtwin.clock import S, SimClock
+from fieldtwin.clock import S
 from fieldtwin.errors import ConfigError, ProtocolError
-from fieldtwin.tsx.textblock import (
-    ERR_CANCELLED,
-    ERR_MODULE_FAULT,
-    ERR_PARAMETER,
-    ERR_POWER_BREAK,
-    MODULE_SYSTEM,
-    V_ERROR,
-    V_OK_WRITE,
-    Answer,
-    Exchange,
-    Request,
-)
+from fieldtwin.tsx.bus import BusImage, Leds, ModuleContext, ModuleEvent, ModuleState
+from fieldtwin.tsx.faults import FaultCategory, FaultLatches
+from fieldtwin.tsx.messages import MessageInterface
+from fieldtwin.tsx.textblock import ERR_POWER_BREAK, V_ERROR, Answer, Exchange
 from fieldtwin.words import get_bit, set_bit
 
 # IWxy,0 standard status word (AEM 4.4-1 and the quick reference)
@@ -56,87 +46,8 @@ ST_RUN = 0xC  # module Run (0 = Stop)
 CMD_RESET_EXCHANGE = 0x2  # message-system reset
 CMD_RUN = 0xC  # module Run/Stop
 
-# Requests every module shares (AEM 4.4-2, SCM 6.3)
-REQ_VERSION = 0x0F
-REQ_FAULT_STRING = 0x47
-REQ_WRITE_APP_NAME = 0x49
-REQ_READ_APP_NAME = 0x4A
-V_VERSION = 0x3F
-V_FAULT_STRING = 0x77
-V_APP_NAME = 0x7A
-APP_NAME_MAX = 20
-VERSION_LENGTH = 27
 
-
-class FaultCategory(enum.Enum):
-    """Where a fault shows in IWxy,0 (AEM 4.4-1)."""
-
-    BLOCKING = "blocking"  # IWxy,0,8, F LED, module out of service
-    MODULE = "module"  # IWxy,0,6 (memorised) and 4, Ixy,S, module to Stop
-    APPLICATION = "application"  # IWxy,0,7 (memorised) and 4, ERR LED, module keeps running
-
-
-class ModuleState(enum.Enum):
-    OFF = "off"  # no power: PLC off, or module out of its slot
-    SELF_TEST = "self-test"
-    OPERATIONAL = "operational"  # Run or Stop, see IWxy,0,C
-    BLOCKED = "blocked"  # blocking fault: out of service until power-up
-
-
-class ModuleEvent(enum.Enum):
-    POWER_ON = "power on"
-    SELF_TEST_DONE = "self-test done"
-    BLOCKING_FAULT = "blocking fault"
-    POWER_OFF = "power off"
-
-
-@dataclass(frozen=True, slots=True)
-class Leds:
-    """The front-panel LEDs as readable state."""
-
-    ok: bool
-    err: bool
-    f: bool
-
-    def __str__(self) -> str:
-        return " ".join(f"{n}={'on' if v else 'off'}" for n, v in self._asdict().items())
-
-    def _asdict(self) -> dict[str, bool]:
-        return {"OK": self.ok, "ERR": self.err, "F": self.f}
-
-
-@dataclass(frozen=True, slots=True)
-class BusImage:
-    """What the PLC reads from a slot at a bus refresh."""
-
-    iw: tuple[int, ...]
-    i_bits: int
-    fault: bool  # Ixy,S
-
-
-@dataclass(frozen=True, slots=True)
-class ModuleContext:
-    """What the PLC gives a module it inserts."""
-
-    clock: SimClock
-    plc_model: str = "TSX 87"
-    # Returns the PLC's fieldtwin.runtime.runner.Runner, creating it: call it when the
-    # module wires a real endpoint (pty, serial, TCP), so that simulated time follows
-    # the wall clock, also inside plc.advance and plc.exchange (SCM issue).
-    pace: Callable[[], Any] | None = None
-
-
-@dataclass(slots=True)
-class _Latch:
-    """One fault of the fault bit string and its acknowledgement (AEM 4.4-1)."""
-
-    category: FaultCategory
-    active: bool = False
-    latched: bool = False  # shown in IWxy,0 until acknowledged and gone
-    acknowledged: bool = False
-
-
-class IntelligentModule:
+class IntelligentModule(MessageInterface):
     """Base of every intelligent module twin; subclasses add their function."""
 
     type_name: ClassVar[str] = "intelligent module"
@@ -167,7 +78,7 @@ class IntelligentModule:
         self.o_bits = 0
         self.awaiting_configuration = False
         self.app_name = b""
-        self._faults: dict[int, _Latch] = {}
+        self._faults = FaultLatches()
         self._exchanges: dict[int, Exchange] = {}
         self._handles: list[ClockHandle] = []
         self._hardware_faults: set[int] = set()  # found by the next initial self-test
@@ -347,17 +258,14 @@ class IntelligentModule:
             return False
         if not self.has_run_stop:
             return False
-        if any(f.active and f.category is FaultCategory.MODULE for f in self._faults.values()):
+        if self._faults.any(FaultCategory.MODULE, memorised=False):
             return False  # AEM 2.5-4: module to Stop until the fault disappears
         return bool(get_bit(self.ow[0], CMD_RUN)) and self.run_permitted()
 
     # --- faults (AEM 4.4-1) ------------------------------------------------
 
     def _fault_category(self, bit: int) -> FaultCategory:
-        latch = self._faults.get(bit)
-        if latch is not None:
-            return latch.category
-        return self.fault_category_of(bit)
+        return self._faults.category(bit) or self.fault_category_of(bit)
 
     def fault_category_of(self, bit: int) -> FaultCategory:
         """Category of fault-string bit ``bit`` (subclasses map their layout)."""
@@ -381,23 +289,10 @@ class IntelligentModule:
         self.refresh_status()
 
     def _set_latch(self, bit: int, active: bool, category: FaultCategory) -> None:
-        latch = self._faults.get(bit)
-        if latch is None:
-            if not active:
-                return
-            latch = self._faults[bit] = _Latch(category)
-        if active and not latch.active:
-            latch.active = True
-            latch.latched = True
-            latch.acknowledged = False
-        elif not active and latch.active:
-            latch.active = False
-            if latch.acknowledged:
-                latch.latched = False  # read while present: goes when the fault ends
+        self._faults.set(bit, active, category)
 
     def fault_active(self, bit: int) -> bool:
-        latch = self._faults.get(bit)
-        return bool(latch and latch.active)
+        return self._faults.active(bit)
 
     def hardware_fault(self, bit: int, present: bool = True) -> None:
         """A fault the next initial self-test will find (and, powered, now)."""
@@ -410,23 +305,12 @@ class IntelligentModule:
 
     def read_fault_string(self) -> bytes:
         """The fault bit string; reading it acknowledges the memorised bits."""
-        data = bytearray(self.fault_string_bytes)
-        for bit, latch in self._faults.items():
-            if latch.active or latch.latched:
-                data[bit // 8] |= 1 << (bit % 8)
-        for latch in self._faults.values():
-            if latch.active:
-                latch.acknowledged = True
-            else:
-                latch.latched = False
+        data = self._faults.read(self.fault_string_bytes)
         self.refresh_status()
-        return bytes(data)
+        return data
 
     def _any(self, category: FaultCategory, *, memorised: bool) -> bool:
-        return any(
-            f.category is category and (f.active or (memorised and f.latched))
-            for f in self._faults.values()
-        )
+        return self._faults.any(category, memorised=memorised)
 
     @property
     def module_fault(self) -> bool:
@@ -494,80 +378,7 @@ class IntelligentModule:
     def bus_read(self) -> BusImage:
         return BusImage(tuple(self.iw), self.i_bits, self.module_fault)
 
-    # --- the message interface ---------------------------------------------
-
-    def submit(
-        self, request: Request, now: int, on_done: Callable[[Exchange, int], None]
-    ) -> Exchange:
-        """The PLC validated a Text Block addressed to this module."""
-        exchange = Exchange(request, now, on_done)
-        key = request.channel
-        if self.state in (ModuleState.OFF, ModuleState.BLOCKED) or not self.code_ok:
-            exchange.complete(Answer.fault(ERR_MODULE_FAULT), now)
-            return exchange
-        busy = self._exchanges.get(key)
-        if busy is not None and not busy.done:
-            exchange.complete(Answer.fault(ERR_PARAMETER), now)
-            return exchange
-        self._exchanges[key] = exchange
-        if self.state is not ModuleState.SELF_TEST:  # else held until the self-test ends
-            self._dispatch(exchange, now)
-        return exchange
-
-    def _dispatch(self, exchange: Exchange, now: int) -> None:
-        request = exchange.request
-        common = {
-            REQ_VERSION: self._req_version,
-            REQ_FAULT_STRING: self._req_fault_string,
-            REQ_WRITE_APP_NAME: self._req_write_app_name,
-            REQ_READ_APP_NAME: self._req_read_app_name,
-        }
-        handler = common.get(request.code) if request.channel == MODULE_SYSTEM else None
-        if handler is not None and request.code not in self.overridden_requests():
-            exchange.complete(handler(request), now)
-        else:
-            self.handle_request(exchange, now)
-
-    def overridden_requests(self) -> frozenset[int]:
-        """Common request codes a subclass answers itself in handle_request."""
-        return frozenset()
-
-    def pending_exchange(self, channel: int) -> Exchange | None:
-        exchange = self._exchanges.get(channel)
-        return exchange if exchange is not None and not exchange.done else None
-
-    def reset_exchanges(self, now: int, channel: int | None = None) -> None:
-        """Cancel exchanges in progress (OWxy,0,2, or a channel reset bit)."""
-        for key, exchange in list(self._exchanges.items()):
-            if channel is None or key == channel:
-                self.on_exchange_cancelled(exchange, now)
-                exchange.complete(Answer.fault(ERR_CANCELLED), now)
-
-    def cancel_exchange(self, exchange: Exchange, now: int) -> None:
-        """A Text Block's reset input cancels this one exchange."""
-        self.reset_exchanges(now, exchange.request.channel)
-
-    def on_exchange_cancelled(self, exchange: Exchange, now: int) -> None:
-        """An exchange is about to be cancelled: stop what it started."""
-
-    def _req_version(self, request: Request) -> Answer:
-        # AEM 4.4-2, SCM 6.3: 27 characters, V = H'3F'
-        text = self.version_text.encode("ascii")[:VERSION_LENGTH].ljust(VERSION_LENGTH, b" ")
-        return Answer(v=V_VERSION, data=text)
-
-    def _req_fault_string(self, request: Request) -> Answer:
-        return Answer(v=V_FAULT_STRING, data=self.read_fault_string())
-
-    def _req_write_app_name(self, request: Request) -> Answer:
-        # AEM 4.4-2, SCM 6.3: 1 to 20 characters, V = H'FE'
-        if not 1 <= len(request.data) <= APP_NAME_MAX:
-            return Answer(v=V_ERROR)
-        self.app_name = request.data
-        return Answer(v=V_OK_WRITE)
-
-    def _req_read_app_name(self, request: Request) -> Answer:
-        # SCM 6.3: "systematically returns 20 characters"
-        return Answer(v=V_APP_NAME, data=self.app_name.ljust(APP_NAME_MAX, b" "))
+    # the message interface: fieldtwin.tsx.messages.MessageInterface
 
     # --- status for people -------------------------------------------------
 
@@ -584,3 +395,14 @@ class IntelligentModule:
             lines["code"] = f"declared code {self.declared_code} is not this module's"
         lines.update(self.status_details())
         return lines
+
+
+__all__ = [
+    "BusImage",
+    "FaultCategory",
+    "IntelligentModule",
+    "Leds",
+    "ModuleContext",
+    "ModuleEvent",
+    "ModuleState",
+]
