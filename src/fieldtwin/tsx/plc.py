@@ -10,38 +10,31 @@ its report appears at the end of a later cycle.
 
 from __future__ import annotations
 
-import enum
 import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 from fieldtwin.clock import MS, Handle, SimClock, seconds
-from fieldtwin.errors import ConfigError, FieldtwinError
+from fieldtwin.errors import ConfigError
 from fieldtwin.tsx import registry
 from fieldtwin.tsx.addressing import ObjectKind, ObjectRef, parse_object
-from fieldtwin.tsx.module import BusImage, IntelligentModule, ModuleContext, ModuleState
+from fieldtwin.tsx.module import BusImage, IntelligentModule, ModuleContext
 from fieldtwin.tsx.textblock import (
-    ERR_CANCELLED,
-    ERR_INDIRECT,
-    ERR_MODULE_FAULT,
-    ERR_PARAMETER,
     ERR_POWER_BREAK,
-    ERR_TABLE_LENGTH,
-    ERR_TOO_LONG,
-    ERROR_TEXT,
-    MODULE_SYSTEM,
-    Answer,
-    Exchange,
-    Request,
+)
+from fieldtwin.tsx.txt import (
+    DATA_WORDS,
+    ExchangeResult,
+    ExchangeTimeout,
+    TextBlock,
+    TextBlocks,
 )
 from fieldtwin.words import (
-    bytes_to_words,
     format_hex,
     get_bit,
     set_bit,
     to_unsigned,
-    words_to_bytes,
 )
 
 
@@ -65,81 +58,9 @@ MODELS = {
 }
 
 POWER_RESERVE_US = 10 * MS
-DATA_WORDS = 4096  # internal words W0..W4095 (Text Block tables, manual-notes)
 _W_RE = re.compile(
     r"^W(\d{1,5})$", re.IGNORECASE
 )  # a shorter break does not restart the modules (manual-notes)
-
-
-class ExchangeTimeout(FieldtwinError):
-    """plc.exchange gave up: the module did not end the exchange within the bound."""
-
-
-@dataclass(frozen=True, slots=True)
-class ExchangeResult:
-    """The outputs of a Text Block at the end of an exchange."""
-
-    v: int  # the report (TXTi,V, or TXTi,R on a 47-20)
-    s: int  # bytes received, or the error code when e
-    e: bool  # TXTi,E: incorrect exchange
-    data: bytes
-    report_name: str = "V"
-    ended_at: int = 0
-
-    @property
-    def r(self) -> int:
-        return self.v
-
-    @property
-    def d(self) -> bool:
-        return True
-
-    @property
-    def words(self) -> list[int]:
-        return bytes_to_words(self.data)
-
-    @property
-    def error_text(self) -> str | None:
-        return ERROR_TEXT.get(self.s, f"error {self.s}") if self.e else None
-
-    def __str__(self) -> str:
-        head = f"TXT,{self.report_name} = {format_hex(self.v)}  TXT,S = {self.s}"
-        if self.e:
-            return f"{head}  TXT,E = 1 ({self.error_text})"
-        words = " ".join(format_hex(w) for w in self.words)
-        return f"{head}  TXT,E = 0" + (f"  data = {words}" if words else "")
-
-
-class TxtState(enum.Enum):
-    IDLE = "idle"
-    STARTED = "started"  # waiting for the end of the master task
-    IN_MODULE = "in module"
-    ANSWERED = "answered"  # report shown at the end of the next cycle
-    DONE = "done"
-
-
-@dataclass(slots=True)
-class TextBlock:
-    """A CPL Text Block: inputs M, C, L and the tables; outputs D, E, V/R, S."""
-
-    index: int
-    m: int = 0
-    c: int = 0
-    send: bytes = b""
-    capacity: int = 0
-    state: TxtState = TxtState.IDLE
-    answer: Answer | None = None
-    answered_at: int = 0
-    result: ExchangeResult | None = None
-    exchange: Exchange | None = field(default=None, repr=False)
-    ticket: object = field(default=None, repr=False)
-    table: int | None = None
-    indirect: int | None = None
-    recv_table: int | None = None
-
-    @property
-    def done(self) -> bool:
-        return self.state is TxtState.DONE
 
 
 @dataclass(slots=True)
@@ -174,9 +95,9 @@ class Plc:
         self.speed = speed
         self.running = True
         self.cycles = 0
-        self.data = [0] * DATA_WORDS  # internal words W0..W4095
+        self.txt = TextBlocks(self.model.table_max, self.model.report_name, self._lookup)
+        self.data = self.txt.data  # internal words W0..W4095
         self._slots: dict[tuple[int, int], _Slot] = {}
-        self._txts: dict[int, TextBlock] = {}
         self._scan: Handle | None = self.clock.call_later(self.scan_us, self._end_of_task)
 
     # --- racks and slots -------------------------------------------------------
@@ -293,9 +214,7 @@ class Plc:
         registers = self.cycles % self.model.register_every == 0
         for entry in self._slots.values():
             self._refresh(entry, registers, now)
-        self._report_answers(now)
-        if self.running:
-            self._validate_text_blocks(now)
+        self.txt.end_of_task(now, self.running)
         self._scan = self.clock.call_later(self.scan_us, self._end_of_task)
 
     def _refresh(self, entry: _Slot, registers: bool, now: int) -> None:
@@ -352,11 +271,7 @@ class Plc:
                 entry.module.power_on()
 
     def _end_exchanges(self, code: int) -> None:
-        now = self.clock.now
-        for txt in self._txts.values():
-            if txt.state in (TxtState.STARTED, TxtState.IN_MODULE, TxtState.ANSWERED):
-                txt.answer = Answer.fault(code)
-                self._finish(txt, now)
+        self.txt.end_all(code, self.clock.now)
 
     # --- objects -----------------------------------------------------------------
 
@@ -417,80 +332,20 @@ class Plc:
             )
         return address
 
-    # --- Text Blocks -------------------------------------------------------------
+    # --- Text Blocks (fieldtwin.tsx.txt) ---------------------------------------------
 
     def text_block(self, index: int) -> TextBlock:
-        return self._txts.setdefault(index, TextBlock(index))
+        return self.txt.block(index)
 
     def start_exchange(
-        self,
-        m: int,
-        c: int,
-        send: Sequence[int] | None = None,
-        *,
-        send_bytes: bytes | None = None,
-        length: int | None = None,
-        recv_bytes: int = 0,
-        txt: int = 0,
-        table: int | None = None,
-        indirect: int | None = None,
-        recv_table: int | None = None,
+        self, m: int, c: int, send: Sequence[int] | None = None, **kw: Any
     ) -> TextBlock:
-        """Set a Text Block's inputs and start it; it is validated at the end of the task.
-
-        ``send``/``send_bytes`` give the transmission table directly; or ``table``
-        names it in the internal words (W100 -> 100, direct addressing) or
-        ``indirect`` names a word that holds the table's address.  The received
-        words go to ``recv_table`` (W1000 -> 1000) when given, else to the table.
-        """
-        tb = self.text_block(txt)
-        if tb.state in (TxtState.STARTED, TxtState.IN_MODULE, TxtState.ANSWERED):
-            raise ConfigError(
-                f"TXT{txt} is busy ({tb.state.value}); reset it or wait for TXT{txt},D"
-            )
-        for given in (table, recv_table):
-            if given is not None and not 0 <= given < DATA_WORDS:
-                raise ConfigError(f"table W{given} out of range (allowed W0..W{DATA_WORDS - 1})")
-        tb.table, tb.indirect, tb.recv_table = table, indirect, recv_table
-        if send is None and send_bytes is None and (table is not None or indirect is not None):
-            send = self._table_words(table, indirect, length)
-        data = send_bytes if send_bytes is not None else words_to_bytes(send or [])
-        unresolved = indirect is not None and self._resolve_table(None, indirect) is None
-        if length is not None and not unresolved:  # else TXTi,S = 10 at validation
-            if not 0 <= length <= len(data):
-                raise ConfigError(f"TXT{txt},L = {length} but the table holds {len(data)} bytes")
-            data = data[:length]
-        tb.m, tb.c, tb.send, tb.capacity = m & 0xFFFF, c & 0xFF, data, recv_bytes
-        tb.state, tb.answer, tb.result, tb.exchange = TxtState.STARTED, None, None, None
-        return tb
-
-    def _table_words(
-        self, table: int | None, indirect: int | None, length: int | None
-    ) -> list[int]:
-        start = self._resolve_table(table, indirect)
-        if start is None:
-            return []
-        count = (length or 0) + 1 >> 1
-        return self.data[start : start + count]
-
-    def _resolve_table(self, table: int | None, indirect: int | None) -> int | None:
-        if indirect is not None:
-            address = self.data[indirect]
-            return address if address < DATA_WORDS else None
-        return table
+        """Set a Text Block's inputs and start it: see TextBlocks.start."""
+        return self.txt.start(m, c, send, **kw)
 
     def reset_text_block(self, txt: int) -> None:
         """The Text Block's R input: the exchange in progress ends with TXTi,S = 1."""
-        tb = self.text_block(txt)
-        if tb.state not in (TxtState.STARTED, TxtState.IN_MODULE, TxtState.ANSWERED):
-            return
-        tb.ticket = None
-        if tb.state is TxtState.IN_MODULE and tb.exchange is not None:
-            entry = self._slot_for(tb.m)
-            if entry is not None:
-                entry.module.cancel_exchange(tb.exchange, self.clock.now)
-        tb.answer = Answer.fault(ERR_CANCELLED)
-        self._finish(tb, self.clock.now)
+        self.txt.reset(txt, self.clock.now)
 
     def exchange(
         self,
@@ -498,97 +353,24 @@ class Plc:
         c: int,
         send: Sequence[int] | None = None,
         *,
-        send_bytes: bytes | None = None,
-        length: int | None = None,
-        recv_bytes: int = 0,
-        txt: int = 0,
-        table: int | None = None,
-        indirect: int | None = None,
-        recv_table: int | None = None,
         timeout_s: float = 1200.0,
+        **kw: Any,
     ) -> ExchangeResult:
-        """Start a Text Block exchange and run the simulation until it ends."""
-        tb = self.start_exchange(
-            m,
-            c,
-            send,
-            send_bytes=send_bytes,
-            length=length,
-            recv_bytes=recv_bytes,
-            txt=txt,
-            table=table,
-            indirect=indirect,
-            recv_table=recv_table,
-        )
+        """Start a Text Block exchange and run the simulation until it ends (bounded).
+
+        Keywords: send_bytes, length, recv_bytes, txt, table, indirect, recv_table.
+        """
+        tb = self.txt.start(m, c, send, **kw)
         if not self._run_until(lambda: tb.done, seconds(timeout_s)) or tb.result is None:
             raise ExchangeTimeout(
-                f"TXT{txt} (M={format_hex(m)}, C={format_hex(c, 2)}) not ended after"
+                f"TXT{tb.index} (M={format_hex(m)}, C={format_hex(c, 2)}) not ended after"
                 f" {timeout_s} simulated seconds (state {tb.state.value})"
             )
         return tb.result
 
-    def _slot_for(self, m: int) -> _Slot | None:
-        rack, slot = (m >> 12) & 0xF, (m >> 8) & 0xF
-        return self._slots.get((rack, slot))
-
-    def _validate_text_blocks(self, now: int) -> None:
-        for tb in self._txts.values():
-            if tb.state is TxtState.STARTED:
-                self._validate(tb, now)
-
-    def _validate(self, tb: TextBlock, now: int) -> None:
-        table_max = self.model.table_max
-        if tb.indirect is not None and self._resolve_table(None, tb.indirect) is None:
-            tb.answer, tb.answered_at, tb.state = Answer.fault(ERR_INDIRECT), now, TxtState.ANSWERED
-            return
-        if len(tb.send) > table_max or tb.capacity > table_max:
-            tb.answer = Answer.fault(ERR_TABLE_LENGTH)
-            tb.answered_at = now
-            tb.state = TxtState.ANSWERED
-            return
-        channel = tb.m & 0xFF
-        entry = self._slot_for(tb.m)
-        if entry is None or channel not in (0x00, 0x01, MODULE_SYSTEM):
-            tb.answer = Answer.fault(ERR_PARAMETER)
-        elif not entry.present or entry.module.state is ModuleState.OFF:
-            tb.answer = Answer.fault(ERR_MODULE_FAULT)
-        if tb.answer is not None:
-            tb.answered_at = now
-            tb.state = TxtState.ANSWERED
-            return
-        assert entry is not None
-        tb.state = TxtState.IN_MODULE
-        ticket = tb.ticket = object()
-
-        def done(exchange: Exchange, at: int) -> None:
-            if tb.ticket is ticket and tb.state is TxtState.IN_MODULE:
-                tb.answer, tb.answered_at, tb.state = exchange.answer, at, TxtState.ANSWERED
-
-        tb.exchange = entry.module.submit(Request(tb.c, channel, tb.send, tb.capacity), now, done)
-
-    def _report_answers(self, now: int) -> None:
-        for tb in self._txts.values():
-            if tb.state is TxtState.ANSWERED and tb.answered_at < now:
-                self._finish(tb, now)
-
-    def _finish(self, tb: TextBlock, now: int) -> None:
-        answer = tb.answer or Answer.fault(ERR_MODULE_FAULT)
-        name = self.model.report_name
-        if answer.error is not None:
-            result = ExchangeResult(0, answer.error, True, b"", name, now)
-        elif len(answer.data) > tb.capacity:
-            result = ExchangeResult(answer.v, ERR_TOO_LONG, True, b"", name, now)
-        else:
-            result = ExchangeResult(answer.v, len(answer.data), False, answer.data, name, now)
-            start = tb.recv_table
-            if start is None:
-                start = self._resolve_table(tb.table, tb.indirect)
-            words = result.words
-            if start is not None and words:
-                end = min(start + len(words), DATA_WORDS)
-                self.data[start:end] = words[: end - start]
-        tb.result = result
-        tb.state = TxtState.DONE
+    def _lookup(self, m: int) -> tuple[IntelligentModule, bool] | None:
+        entry = self._slots.get(((m >> 12) & 0xF, (m >> 8) & 0xF))
+        return None if entry is None else (entry.module, entry.present)
 
     # --- status ------------------------------------------------------------------
 
@@ -610,4 +392,4 @@ def _bit_value(name: str, value: int) -> int:
     return value
 
 
-__all__ = ["MODELS", "ExchangeResult", "ExchangeTimeout", "Plc", "TextBlock"]
+__all__ = ["DATA_WORDS", "MODELS", "ExchangeResult", "ExchangeTimeout", "Plc", "TextBlock"]

@@ -1,0 +1,263 @@
+"""The Text Blocks of a PLC: inputs M, C, L and the tables; outputs D, E, V/R, S.
+
+A Text Block started during a cycle is validated at the end of the master task
+(AEM 4.2-2), handed to the module, and its report appears at the end of the first
+cycle that ends after the module's answer (docs/manual-notes.md F-5).  System
+errors end it with TXTi,E = 1 and a TXTi,S code (SCM 4.5).
+"""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+from fieldtwin.errors import ConfigError, FieldtwinError
+from fieldtwin.tsx.bus import ModuleState
+from fieldtwin.tsx.textblock import (
+    ERR_CANCELLED,
+    ERR_INDIRECT,
+    ERR_MODULE_FAULT,
+    ERR_PARAMETER,
+    ERR_TABLE_LENGTH,
+    ERR_TOO_LONG,
+    ERROR_TEXT,
+    MODULE_SYSTEM,
+    Answer,
+    Exchange,
+    Request,
+)
+from fieldtwin.words import bytes_to_words, format_hex, words_to_bytes
+
+if TYPE_CHECKING:
+    from fieldtwin.tsx.module import IntelligentModule
+
+DATA_WORDS = 4096  # internal words W0..W4095 (Text Block tables, manual-notes F-12)
+
+# M -> (module, present in its slot), or None for an empty slot
+Lookup = Callable[[int], "tuple[IntelligentModule, bool] | None"]
+
+
+class ExchangeTimeout(FieldtwinError):
+    """plc.exchange gave up: the module did not end the exchange within the bound."""
+
+
+@dataclass(frozen=True, slots=True)
+class ExchangeResult:
+    """The outputs of a Text Block at the end of an exchange."""
+
+    v: int  # the report (TXTi,V, or TXTi,R on a 47-20)
+    s: int  # bytes received, or the error code when e
+    e: bool  # TXTi,E: incorrect exchange
+    data: bytes
+    report_name: str = "V"
+    ended_at: int = 0
+
+    @property
+    def r(self) -> int:
+        return self.v
+
+    @property
+    def d(self) -> bool:
+        return True
+
+    @property
+    def words(self) -> list[int]:
+        return bytes_to_words(self.data)
+
+    @property
+    def error_text(self) -> str | None:
+        return ERROR_TEXT.get(self.s, f"error {self.s}") if self.e else None
+
+    def __str__(self) -> str:
+        head = f"TXT,{self.report_name} = {format_hex(self.v)}  TXT,S = {self.s}"
+        if self.e:
+            return f"{head}  TXT,E = 1 ({self.error_text})"
+        words = " ".join(format_hex(w) for w in self.words)
+        return f"{head}  TXT,E = 0" + (f"  data = {words}" if words else "")
+
+
+class TxtState(enum.Enum):
+    IDLE = "idle"
+    STARTED = "started"  # waiting for the end of the master task
+    IN_MODULE = "in module"
+    ANSWERED = "answered"  # report shown at the end of the next cycle
+    DONE = "done"
+
+
+@dataclass(slots=True)
+class TextBlock:
+    """A CPL Text Block: inputs M, C, L and the tables; outputs D, E, V/R, S."""
+
+    index: int
+    m: int = 0
+    c: int = 0
+    send: bytes = b""
+    capacity: int = 0
+    state: TxtState = TxtState.IDLE
+    answer: Answer | None = None
+    answered_at: int = 0
+    result: ExchangeResult | None = None
+    exchange: Exchange | None = field(default=None, repr=False)
+    ticket: object = field(default=None, repr=False)
+    table: int | None = None
+    indirect: int | None = None
+    recv_table: int | None = None
+
+    @property
+    def done(self) -> bool:
+        return self.state is TxtState.DONE
+
+
+_BUSY = (TxtState.STARTED, TxtState.IN_MODULE, TxtState.ANSWERED)
+
+
+class TextBlocks:
+    """Every Text Block of one PLC, and the internal words their tables live in."""
+
+    def __init__(self, table_max: int, report_name: str, lookup: Lookup) -> None:
+        self.table_max = table_max
+        self.report_name = report_name
+        self.data = [0] * DATA_WORDS
+        self._lookup = lookup
+        self._txts: dict[int, TextBlock] = {}
+
+    def block(self, index: int) -> TextBlock:
+        return self._txts.setdefault(index, TextBlock(index))
+
+    def end_of_task(self, now: int, running: bool) -> None:
+        """Report the answers that came in, then validate the new requests."""
+        for tb in self._txts.values():
+            if tb.state is TxtState.ANSWERED and tb.answered_at < now:
+                self._finish(tb, now)
+        if running:
+            for tb in self._txts.values():
+                if tb.state is TxtState.STARTED:
+                    self._validate(tb, now)
+
+    def end_all(self, code: int, now: int) -> None:
+        """A power break or a cold restart ends every exchange in progress."""
+        for tb in self._txts.values():
+            if tb.state in _BUSY:
+                tb.answer = Answer.fault(code)
+                self._finish(tb, now)
+
+    def start(
+        self,
+        m: int,
+        c: int,
+        send: Sequence[int] | None = None,
+        *,
+        send_bytes: bytes | None = None,
+        length: int | None = None,
+        recv_bytes: int = 0,
+        txt: int = 0,
+        table: int | None = None,
+        indirect: int | None = None,
+        recv_table: int | None = None,
+    ) -> TextBlock:
+        """Set a Text Block's inputs and start it; it is validated at the end of the task.
+
+        ``send``/``send_bytes`` give the transmission table directly; or ``table``
+        names it in the internal words (W100 -> 100, direct addressing) or
+        ``indirect`` names a word that holds the table's address.  The received
+        words go to ``recv_table`` (W1000 -> 1000) when given, else to the table.
+        """
+        tb = self.block(txt)
+        if tb.state in _BUSY:
+            raise ConfigError(
+                f"TXT{txt} is busy ({tb.state.value}); reset it or wait for TXT{txt},D"
+            )
+        for given in (table, recv_table):
+            if given is not None and not 0 <= given < DATA_WORDS:
+                raise ConfigError(f"table W{given} out of range (allowed W0..W{DATA_WORDS - 1})")
+        tb.table, tb.indirect, tb.recv_table = table, indirect, recv_table
+        if send is None and send_bytes is None and (table is not None or indirect is not None):
+            send = self._table_words(table, indirect, length)
+        data = send_bytes if send_bytes is not None else words_to_bytes(send or [])
+        unresolved = indirect is not None and self._resolve_table(None, indirect) is None
+        if length is not None and not unresolved:  # else TXTi,S = 10 at validation
+            if not 0 <= length <= len(data):
+                raise ConfigError(f"TXT{txt},L = {length} but the table holds {len(data)} bytes")
+            data = data[:length]
+        tb.m, tb.c, tb.send, tb.capacity = m & 0xFFFF, c & 0xFF, data, recv_bytes
+        tb.state, tb.answer, tb.result, tb.exchange = TxtState.STARTED, None, None, None
+        return tb
+
+    def _table_words(
+        self, table: int | None, indirect: int | None, length: int | None
+    ) -> list[int]:
+        start = self._resolve_table(table, indirect)
+        if start is None:
+            return []
+        count = (length or 0) + 1 >> 1
+        return self.data[start : start + count]
+
+    def _resolve_table(self, table: int | None, indirect: int | None) -> int | None:
+        if indirect is not None:
+            address = self.data[indirect]
+            return address if address < DATA_WORDS else None
+        return table
+
+    def reset(self, txt: int, now: int) -> None:
+        """The Text Block's R input: the exchange in progress ends with TXTi,S = 1."""
+        tb = self.block(txt)
+        if tb.state not in _BUSY:
+            return
+        tb.ticket = None
+        if tb.state is TxtState.IN_MODULE and tb.exchange is not None:
+            found = self._lookup(tb.m)
+            if found is not None:
+                found[0].cancel_exchange(tb.exchange, now)
+        tb.answer = Answer.fault(ERR_CANCELLED)
+        self._finish(tb, now)
+
+    def _validate(self, tb: TextBlock, now: int) -> None:
+        table_max = self.table_max
+        if tb.indirect is not None and self._resolve_table(None, tb.indirect) is None:
+            tb.answer, tb.answered_at, tb.state = Answer.fault(ERR_INDIRECT), now, TxtState.ANSWERED
+            return
+        if len(tb.send) > table_max or tb.capacity > table_max:
+            tb.answer = Answer.fault(ERR_TABLE_LENGTH)
+            tb.answered_at = now
+            tb.state = TxtState.ANSWERED
+            return
+        channel = tb.m & 0xFF
+        found = self._lookup(tb.m)
+        if found is None or channel not in (0x00, 0x01, MODULE_SYSTEM):
+            tb.answer = Answer.fault(ERR_PARAMETER)
+        elif not found[1] or found[0].state is ModuleState.OFF:
+            tb.answer = Answer.fault(ERR_MODULE_FAULT)
+        if tb.answer is not None or found is None:
+            tb.answered_at = now
+            tb.state = TxtState.ANSWERED
+            return
+        module = found[0]
+        tb.state = TxtState.IN_MODULE
+        ticket = tb.ticket = object()
+
+        def done(exchange: Exchange, at: int) -> None:
+            if tb.ticket is ticket and tb.state is TxtState.IN_MODULE:
+                tb.answer, tb.answered_at, tb.state = exchange.answer, at, TxtState.ANSWERED
+
+        tb.exchange = module.submit(Request(tb.c, channel, tb.send, tb.capacity), now, done)
+
+    def _finish(self, tb: TextBlock, now: int) -> None:
+        answer = tb.answer or Answer.fault(ERR_MODULE_FAULT)
+        name = self.report_name
+        if answer.error is not None:
+            result = ExchangeResult(0, answer.error, True, b"", name, now)
+        elif len(answer.data) > tb.capacity:
+            result = ExchangeResult(answer.v, ERR_TOO_LONG, True, b"", name, now)
+        else:
+            result = ExchangeResult(answer.v, len(answer.data), False, answer.data, name, now)
+            start = tb.recv_table
+            if start is None:
+                start = self._resolve_table(tb.table, tb.indirect)
+            words = result.words
+            if start is not None and words:
+                end = min(start + len(words), DATA_WORDS)
+                self.data[start:end] = words[: end - start]
+        tb.result = result
+        tb.state = TxtState.DONE
