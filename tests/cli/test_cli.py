@@ -23,6 +23,17 @@ def fieldtwin(
     )
 
 
+def default_plant_copy(tmp_path: Path) -> Path:
+    """The embedded default plant with its Modbus TCP port left to the system (port 0)."""
+    from importlib import resources
+
+    text = resources.files("fieldtwin").joinpath("plants", "default.toml").read_text("utf-8")
+    assert "tcp://127.0.0.1:5020" in text
+    path = tmp_path / "default.toml"
+    path.write_text(text.replace("tcp://127.0.0.1:5020", "tcp://127.0.0.1:0"))
+    return path
+
+
 def plc_plant(tmp_path: Path) -> Path:
     path = tmp_path / "plc.toml"
     path.write_text('[plc]\nmodel = "TSX 47-20"\nscan_ms = 10\n')
@@ -93,7 +104,7 @@ def test_default_plant_in_the_console() -> None:
     assert "leds: OK=on ERR=off F=off" in lines
 
 
-def test_run_serves_the_scm_on_a_pty_that_a_peer_types_into() -> None:
+def test_run_serves_the_scm_on_a_pty_that_a_peer_types_into(tmp_path: Path) -> None:
     """`fieldtwin run` in real time; a pyserial peer types into the full-duplex channel."""
     import re
     import select
@@ -102,7 +113,16 @@ def test_run_serves_the_scm_on_a_pty_that_a_peer_types_into() -> None:
     import serial
 
     proc = subprocess.Popen(
-        [sys.executable, "-m", "fieldtwin", "run", "--no-live", "--status-every", "0.2"],
+        [
+            sys.executable,
+            "-m",
+            "fieldtwin",
+            "run",
+            str(default_plant_copy(tmp_path)),
+            "--no-live",
+            "--status-every",
+            "0.2",
+        ],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -135,6 +155,48 @@ def test_run_serves_the_scm_on_a_pty_that_a_peer_types_into() -> None:
             raise AssertionError(f"the typed characters never showed in IW7,3/IW7,4:\n{seen}")
         if peer is not None:
             peer.close()
+    finally:
+        proc.terminate()
+        proc.wait(timeout=10)
+    assert proc.returncode == 0
+
+
+def test_default_plant_serves_its_two_tes_to_a_modbus_master(tmp_path: Path) -> None:
+    import re
+    import select
+    import time
+
+    from pymodbus.client import ModbusTcpClient
+
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "fieldtwin", "run", str(default_plant_copy(tmp_path)), "--no-live"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=ROOT,
+    )
+    assert proc.stdout is not None
+    try:
+        port = None
+        deadline = time.monotonic() + 20
+        while port is None and time.monotonic() < deadline:
+            if select.select([proc.stdout], [], [], 0.5)[0]:
+                match = re.match(
+                    r"listening: modbus-tcp tcp://127\.0\.0\.1:(\d+) slaves 1,2",
+                    proc.stdout.readline(),
+                )
+                port = int(match.group(1)) if match else None
+        assert port is not None, "no Modbus TCP endpoint announced"
+        client = ModbusTcpClient("127.0.0.1", port=port, timeout=2, retries=0)
+        assert client.connect()  # type: ignore[no-untyped-call]
+        try:
+            for slave in (1, 2):
+                reply = client.read_holding_registers(0, count=2, device_id=slave)
+                assert not reply.isError(), reply
+                assert len(reply.registers) == 2
+            assert client.read_holding_registers(0, count=1, device_id=9).isError()
+        finally:
+            client.close()  # type: ignore[no-untyped-call]
     finally:
         proc.terminate()
         proc.wait(timeout=10)
