@@ -33,7 +33,7 @@ def render(plant: Plant, endpoints: list[str]) -> Group:
             table.add_row(
                 module.address,
                 module.type_name,
-                "Run" if module.running else module.state.value,
+                mode(module),
                 _led(leds.ok, "green"),
                 _led(leds.err, "red"),
                 _led(leds.f, "red"),
@@ -47,16 +47,28 @@ def render(plant: Plant, endpoints: list[str]) -> Group:
         for col in ("slave", "model", "status"):
             tes_table.add_column(col)
         for tes in plant.tes:
-            tes_table.add_row(str(tes.slave), str(tes.model_name), _tes_status(tes))
+            tes_table.add_row(str(tes.slave), tes.model.name, tes_status(tes))
         parts.append(tes_table)
     parts.extend(Text(line, "cyan") for line in endpoints)
     parts.append(Text("Ctrl-C to stop", "dim"))
     return Group(*parts)
 
 
-def _tes_status(tes: Any) -> str:
-    summary = getattr(tes, "summary", None)
-    return str(summary()) if callable(summary) else ""
+def mode(module: Any) -> str:
+    """Run / Stop for a module that has them, else its state (self-test, off...)."""
+    if module.running:
+        return "Run"
+    if module.has_run_stop and module.state.value == "operational":
+        return "Stop"
+    return str(module.state.value)
+
+
+def tes_status(tes: Any) -> str:
+    """Power, status word and LEDs of a TES, on one line."""
+    if not tes.powered:
+        return "off"
+    leds = " ".join(f"{name}={state}" for name, state in tes.leds.items())
+    return f"on  status {format_hex(tes.status_word())}  {leds}"
 
 
 def _speed(plant: Plant) -> str:
@@ -73,6 +85,8 @@ def plain_status(plant: Plant) -> list[str]:
             words = " ".join(format_hex(w) for w in image.iw)
             lines.append(
                 f"slot {module.address} {module.type_name}:"
-                f" {'Run' if module.running else module.state.value} {module.leds()} IW {words}"
+                f" {mode(module)} {module.leds()} IW {words}"
             )
+    for tes in plant.tes:
+        lines.append(f"TES {tes.slave} {tes.model.name}: {tes_status(tes)}")
     return lines

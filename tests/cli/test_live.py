@@ -1,0 +1,38 @@
+"""The live view renders every part of a plant (rich, recorded off-screen)."""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+from rich.console import Console as RichConsole
+
+from fieldtwin.live import plain_status, render
+from fieldtwin.plant import load_plant
+from tests.cli.test_cli import default_plant_copy
+
+
+def test_live_view_and_plain_status_show_modules_tes_and_endpoints(tmp_path: Path) -> None:
+    plant = load_plant(default_plant_copy(tmp_path), speed=None)
+    assert plant.plc is not None
+    plant.plc.advance(12.0)
+    screen = RichConsole(record=True, width=160, file=io.StringIO())
+    screen.print(render(plant, ["listening: modbus-tcp tcp://127.0.0.1:5020 slaves 1,2"]))
+    text = screen.export_text()
+    for expected in (
+        "t = 12.0 s",
+        "TSX 87 RUN",
+        "TSX AEM 811",
+        "TSX DEM 2412",
+        "TSX SCM 2111",
+        "TES 32EST",
+        "TES 8EA",
+        "listening: modbus-tcp",
+        "Ctrl-C to stop",
+    ):
+        assert expected in text, expected
+    lines = plain_status(plant)
+    assert lines[0] == "t = 12.000 s"
+    assert any(line.startswith("slot 5 TSX AEM 811: Run") for line in lines)
+    assert any(line.startswith("TES 2 TES 8EA: on  status H'") for line in lines)
+    plant.close()
