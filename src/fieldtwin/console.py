@@ -385,6 +385,8 @@ def run_script(
 ) -> int:
     """Run a script; the first error stops it with status 2 and names the line."""
     for number, line in enumerate(lines, start=1):
+        if line.strip().lower() in ("quit", "exit"):
+            break
         try:
             for text in console.execute(line):
                 print(text, file=out)
@@ -392,8 +394,6 @@ def run_script(
             out.flush()
             print(f"{source}:{number}: {line.strip()}: {exc}", file=err)
             return 2
-        if line.strip().lower() in ("quit", "exit"):
-            break
     return 0
 
 

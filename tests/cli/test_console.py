@@ -97,6 +97,12 @@ def test_a_script_stops_at_the_first_error_with_status_2(console: Console) -> No
     assert err.getvalue().startswith("s.txt:2: read IW5,9: 'IW5,9'")
 
 
+def test_quit_ends_a_script(console: Console) -> None:
+    out, err = io.StringIO(), io.StringIO()
+    assert run_script(console, ["advance 1", "quit", "read IW5,9"], out, err, "s.txt") == 0
+    assert out.getvalue() == "t = 1.000 s\n" and err.getvalue() == ""
+
+
 def test_durations() -> None:
     assert parse_duration("250ms") == 0.25
     assert parse_duration("2min") == 120

@@ -32,6 +32,8 @@ INPUTS: dict[Adaptor, tuple[str, ...]] = {
 }
 # SCM 5.1: SCA1 unwired CTS/CD are pulled to 0 (active); SCA3 unused signals pulled up to 1
 UNWIRED_LEVEL = {Adaptor.SCA3: 1}
+# SCM 5.1 SCA2 PSR: "0 = used in multipoint mode, 1 = used in point-to-point mode"
+LOOP_PSR = {"multipoint": 0, "point-to-point": 1}
 
 
 @dataclass(slots=True)
@@ -42,6 +44,7 @@ class Signals:
     inputs: dict[str, int] = field(default_factory=dict)
     outputs: int = 0  # the channel's 4 output bits as the program wrote them
     dtr_auto: int | None = None  # SCM 3.2 automatic DTR (full-duplex): the module drives it
+    loop: str | None = None  # SCA2: how the current loop is wired (None: not modelled)
 
     def __post_init__(self) -> None:
         level = UNWIRED_LEVEL.get(self.adaptor, 0)
@@ -82,6 +85,20 @@ class Signals:
         # SCM 5.1 SCA3 DSRS: 1 = the channel operates at half the configured speed
         return self.adaptor is Adaptor.SCA3 and self.output("DSRS") == 1
 
+    def set_loop(self, loop: str) -> None:
+        if self.adaptor is not Adaptor.SCA2:
+            raise ConfigError(f"{self.adaptor.label}: only an SCA2 adaptor has a current loop")
+        key = loop.strip().lower()
+        if key not in LOOP_PSR:
+            raise ConfigError(f"loop {loop!r} not allowed (allowed: {', '.join(LOOP_PSR)})")
+        self.loop = key
+
+    @property
+    def rx_inverted(self) -> bool:
+        # SCM 5.1 SCA2: "The state of this bit inverses the current loop reception circuit
+        # logic": a PSR that does not match the wiring reads every level inverted
+        return self.loop is not None and self.output("PSR") != LOOP_PSR[self.loop]
+
     def input_nibble(self) -> int:
         """The channel's 4 discrete input bits."""
         nibble = 0
@@ -93,6 +110,8 @@ class Signals:
     def describe(self) -> str:
         parts = [f"{n}={v}" for n, v in self.inputs.items()]
         parts += [f"{n}={self.output(n)}" for n in OUTPUTS[self.adaptor] if n != "DTR"]
+        if self.loop is not None:
+            parts.append(f"loop {self.loop}" + (" (receiver inverted)" if self.rx_inverted else ""))
         if "DTR" in OUTPUTS[self.adaptor]:
             parts.append(f"DTR={self.dtr}" + (" (auto)" if self.dtr_auto is not None else ""))
         return " ".join(parts) or "no control signals"

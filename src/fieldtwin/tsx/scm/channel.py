@@ -63,14 +63,13 @@ class Channel:
         self.signals = signals
         self.config = config
         self.xoff_held = False  # SCM 3.2 Xon-Xoff (T): XOFF received, transmission paused
-        self.inject_parity = False
-        self.inject_format = False
         line.on_char = self._on_line_char
         line.on_sent = self.on_sent
         line.tx_allowed = self.tx_allowed
         if config is not None:
             line.fmt, line.baud = config.fmt, config.baud
         line.half_speed = signals.half_speed
+        line.invert_rx = signals.rx_inverted
 
     # --- what the module asks --------------------------------------------
 
@@ -120,6 +119,7 @@ class Channel:
 
     def signals_changed(self, now: int) -> None:
         self.line.half_speed = self.signals.half_speed
+        self.line.invert_rx = self.signals.rx_inverted
         self.line.kick(now)
 
     def outgoing(self, chars: bytes) -> tuple[bytes, int]:
@@ -148,9 +148,9 @@ class Channel:
     def _on_line_char(self, char: RxChar, now: int) -> None:
         if not self.signals.receive_enabled or self.config is None:
             return  # SCM 5.1: CD at 1 inhibits the reception circuit
-        if char.parity_error or self.inject_parity:
+        if char.parity_error or self.line.inject_parity:
             self.host.app_fault(self.index, AppFault.PARITY)
-        if char.format_error or self.inject_format:
+        if char.format_error or self.line.inject_format:
             self.host.app_fault(self.index, AppFault.FORMAT)
         value = char.value
         if self.config.xon_xoff_tx and value in (XON, XOFF):

@@ -80,13 +80,38 @@ class Port:
     runner: Any = None
     path: str | None = None
     connections: list[str] = field(default_factory=list)
+    settings_given: bool = False  # the URL fixed baud/parity/data/stop: never follow
+    follow_error: str | None = None
+
+    def follow(self, fmt: CharFormat, baud: int) -> None:
+        """Set a host serial port to the channel's configured format and speed (SCM 3.2).
+
+        A port that refuses a setting keeps its previous one; ``follow_error`` says so
+        in the status (some pty drivers refuse to change the character size of an open
+        slave).  termios.error is not an OSError, hence the broad catch.
+        """
+        port = getattr(self.peer, "port", None)  # SerialTransport.port: the pyserial object
+        if self.settings_given or port is None:
+            return
+        self.follow_error = None
+        wanted = {"bytesize": fmt.data_bits, "parity": fmt.parity.letter, "stopbits": fmt.stop_bits}
+        for key, value in {"baudrate": baud, **wanted}.items():
+            old = getattr(port, key)
+            if old == value:
+                continue
+            try:
+                setattr(port, key, value)
+            except Exception as exc:  # pyserial raises ValueError, termios.error
+                setattr(port, f"_{key}", old)  # pyserial stored the value before it failed
+                self.follow_error = f"host port refused {key}={value} ({exc})"
 
     def describe(self) -> str:
         if self.listener is not None:
             peer = self.peer.name if self.peer is not None and not self.peer.closed else "waiting"
             return f"{self.path} ({peer})"
         if self.path is not None:
-            return f"{self.url.split('?')[0]} {self.path}"
+            note = f" [{self.follow_error}]" if self.follow_error else ""
+            return f"{self.url.split('?')[0]} {self.path}{note}"
         return self.url
 
     def send(self, data: bytes) -> None:
@@ -118,11 +143,12 @@ def open_real(url: str, line: Line, runner: Any) -> Port:
     from fieldtwin.transports.base import LineSettings
 
     endpoint = parse_endpoint(url)
-    port = Port(url, line, runner=runner)
+    # parse_endpoint gives a serial URL default settings: only a query fixes them
+    given = endpoint.settings is not None and "?" in url
+    port = Port(url, line, runner=runner, settings_given=given)
     fmt = line.fmt
-    settings = endpoint.settings or LineSettings(
-        line.baud, fmt.data_bits, fmt.parity.letter, fmt.stop_bits
-    )
+    settings = endpoint.settings if given else None
+    settings = settings or LineSettings(line.baud, fmt.data_bits, fmt.parity.letter, fmt.stop_bits)
     if endpoint.scheme == "pty":
         port.peer = open_pty(settings)
         port.path = port.peer.peer_path

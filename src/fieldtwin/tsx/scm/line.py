@@ -101,17 +101,28 @@ class RxChar:
 
 
 def decode_stream(
-    data: bytes, sender: CharFormat, sender_baud: float, receiver: CharFormat, receiver_baud: float
+    data: bytes,
+    sender: CharFormat,
+    sender_baud: float,
+    receiver: CharFormat,
+    receiver_baud: float,
+    *,
+    invert: bool = False,
 ) -> list[RxChar]:
-    """Characters a UART with ``receiver`` settings reads from back-to-back ``sender`` frames."""
-    levels = [b for value in data for b in frame_bits(value, sender)]
+    """Characters a UART with ``receiver`` settings reads from back-to-back ``sender`` frames.
+
+    ``invert``: the reception circuit reads every level inverted (SCM 5.1 SCA2 PSR), the
+    idle line included.
+    """
+    levels = [b ^ invert for value in data for b in frame_bits(value, sender)]
+    idle = int(not invert)
     sbit = 1.0 / sender_baud
     rbit = 1.0 / receiver_baud
     end = len(levels) * sbit
 
     def level(t: float) -> int:
         index = int(t / sbit)
-        return levels[index] if 0 <= index < len(levels) else 1
+        return levels[index] if 0 <= index < len(levels) else idle
 
     out: list[RxChar] = []
     t = 0.0
@@ -150,6 +161,9 @@ class Line:
         self.fmt = CharFormat()
         self.baud = 9600
         self.half_speed = False  # SCA3 DSRS (SCM 5.1): half the configured speed
+        self.invert_rx = False  # SCA2 PSR not matching the loop (SCM 5.1)
+        self.inject_parity = False  # injected faults: every character received in error
+        self.inject_format = False
         self.send_port: Callable[[bytes], None] | None = None
         self.on_sent: Callable[[int, str, int], None] = lambda value, tag, now: None
         self.on_char: Callable[[RxChar, int], None] = lambda char, now: None
@@ -223,11 +237,12 @@ class Line:
     ) -> None:
         """Bytes from the peer at ``now``: received one by one at the sender's pace."""
         fmt, speed = sender or self.fmt, baud or self.effective_baud
-        if fmt == self.fmt and speed == self.effective_baud:
+        if fmt == self.fmt and speed == self.effective_baud and not self.invert_rx:
             step = self.char_us
             chars = [RxChar(v & fmt.mask, offset_us=(i + 1) * step) for i, v in enumerate(data)]
         else:
-            chars = decode_stream(data, fmt, speed, self.fmt, self.effective_baud)
+            rx_baud = self.effective_baud
+            chars = decode_stream(data, fmt, speed, self.fmt, rx_baud, invert=self.invert_rx)
         base = max(now, self._rx_free)
         for char in chars:
             self._rx.append((base + char.offset_us, char))

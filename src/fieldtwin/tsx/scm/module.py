@@ -29,12 +29,13 @@ from fieldtwin.tsx.scm import config as cfgmod
 from fieldtwin.tsx.scm import requests as reqmod
 from fieldtwin.tsx.scm.adaptors import Signals
 from fieldtwin.tsx.scm.channel import AppFault, Channel
-from fieldtwin.tsx.scm.endpoints import MemoryPeer, Port, open_real
+from fieldtwin.tsx.scm.endpoints import Port
 from fieldtwin.tsx.scm.fullduplex import FullDuplexChannel
 from fieldtwin.tsx.scm.halfduplex import HalfDuplexChannel
-from fieldtwin.tsx.scm.line import CharFormat, Line
+from fieldtwin.tsx.scm.line import Line
 from fieldtwin.tsx.scm.plant import configure_module
 from fieldtwin.tsx.scm.variants import CODES_47_20, Adaptor, Family, Variant
+from fieldtwin.tsx.scm.wiring import ScmWiring
 from fieldtwin.tsx.textblock import (
     ERR_CANCELLED,
     ERR_MODULE_FAULT,
@@ -77,7 +78,7 @@ HARDWARE_FAULTS = {
 }
 
 
-class ScmModule(IntelligentModule):
+class ScmModule(ScmWiring, IntelligentModule):
     """One module reference of appendix 7.3 (subclassed per reference in ``__init__``)."""
 
     variant: ClassVar[Variant]
@@ -362,6 +363,7 @@ class ScmModule(IntelligentModule):
         self.channels[index] = self._channel(index, config)
         if self.state is ModuleState.OPERATIONAL:
             self.channels[index].start(now)
+        self.follow_configuration(index)
         self.changed()
 
     def _read_config(self, index: int) -> Answer:
@@ -380,65 +382,7 @@ class ScmModule(IntelligentModule):
         self.power_off(now)
         self.power_on(now)
 
-    # --- endpoints ------------------------------------------------------------------
-
-    def attach(self, channel: int, endpoint: str) -> Any:
-        """Wire a channel: "memory" returns a MemoryPeer; "pty" the path a peer opens;
-        "tcp://127.0.0.1:0" the listening address; "serial:///dev/..." the device."""
-        line = self._line(channel)
-        self.detach(channel)
-        if self.adaptors[channel] is Adaptor.NONE:
-            raise ConfigError(f"channel {channel} has no adaptor: nothing to wire")
-        if endpoint.strip() == "memory":
-            port = Port("memory", line)
-            port.peer = MemoryPeer(self.clock, line.feed)
-            line.send_port = port.send
-            self.ports[channel] = port
-            return port.peer
-        if self.ctx.pace is None:
-            raise ConfigError("a real endpoint needs the module to sit in a Plc (its runner)")
-        port = open_real(endpoint, line, self.ctx.pace())
-        line.send_port = port.send
-        self.ports[channel] = port
-        return port.path
-
-    def attach_memory(self, channel: int) -> MemoryPeer:
-        peer = self.attach(channel, "memory")
-        assert isinstance(peer, MemoryPeer)
-        return peer
-
-    def detach(self, channel: int) -> None:
-        port = self.ports[channel]
-        if port is not None:
-            port.close()
-            self.ports[channel] = None
-        self._line(channel).send_port = None
-
-    def _line(self, channel: int) -> Line:
-        if channel not in (0, 1):
-            raise ConfigError(f"SCM channel {channel} does not exist (allowed 0 or 1)")
-        return self.lines[channel]
-
-    def peer_format(self, channel: int) -> CharFormat:
-        return self._line(channel).fmt
-
-    # --- signals, faults, console ------------------------------------------------------
-
-    def set_signal(self, channel: int, name: str, level: int) -> None:
-        """An adaptor input signal (CTS, CD, DSR, RI) as the wiring drives it."""
-        self.signals[self._index(channel)].set_input(name, level)
-        self.channels[channel].signals_changed(self.clock.now)
-        self.changed()
-
-    def _index(self, channel: int) -> int:
-        self._line(channel)
-        return channel
-
-    def console_input(self, channel: int, text: str) -> None:
-        name, sep, level = text.partition("=")
-        if not sep or level.strip() not in ("0", "1"):
-            raise ConfigError(f"SCM input {text!r}: write SIGNAL=0 or SIGNAL=1 (e.g. CTS=0)")
-        self.set_signal(channel, name, int(level))
+    # --- faults ---------------------------------------------------------------------
 
     def fault_names(self) -> Mapping[str, str]:
         names = {
@@ -456,33 +400,9 @@ class ScmModule(IntelligentModule):
             return
         kind, _, ch = name.rpartition("_ch")
         if kind in ("parity", "format") and ch in ("0", "1"):
-            setattr(self.channels[int(ch)], f"inject_{kind}", active)
+            setattr(self.lines[int(ch)], f"inject_{kind}", active)  # kept by the UART
             return
         super().inject_fault(name, active)
-
-    def endpoint_lines(self) -> list[str]:
-        """One line per channel wired to a real endpoint, for `fieldtwin run`."""
-        lines = []
-        for index, port in enumerate(self.ports):
-            if port is not None and port.url != "memory":
-                lines.append(
-                    f"listening: {self.type_name} slot {self.address} channel {index}"
-                    f" {port.describe()}"
-                )
-        return lines
-
-    def status_details(self) -> dict[str, str]:
-        lines = {}
-        for index, channel in enumerate(self.channels):
-            port = self.ports[index]
-            wiring = port.describe() if port is not None else "not wired"
-            lines[f"channel {index}"] = (
-                f"{self.adaptors[index].label} | {channel.describe()} | {wiring}"
-                f" | {self.signals[index].describe()}"
-            )
-        if self.app_name:
-            lines["application name"] = self.app_name.decode("latin-1").rstrip()
-        return lines
 
     def configure_from_plant(self, table: Mapping[str, Any], where: str, base_dir: Path) -> None:
         configure_module(self, table, where)

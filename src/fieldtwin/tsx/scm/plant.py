@@ -6,9 +6,11 @@
     adaptors = ["SCA1", "SCA1"]          # optional: override appendix 7.3
     faults = ["loopback_ch1"]            # optional: injected at start
     channels = [
-      { channel = 0, endpoint = "pty", signals = { CTS = 0 },
-        config = ["H'0802'", "H'9600'", 0, "H'1001'", "H'1000'", "H'0D00'", 0, 0] },
+      { channel = 0, endpoint = "pty", config = ["H'0802'", "H'9600'", 0, 0, 0, 0, 0, 0] },
+      { channel = 1, loop = "point-to-point" },  # SCA2 only: PSR must then be 1
     ]
+
+(an inline table stays on one line; ``[[module.channels]]`` tables take long entries)
 
 ``config`` is the write-configuration table (8 or 9 words, SCM 3.2), applied as
 the request H'40' would be; a table the module would refuse is an error here.
@@ -28,7 +30,7 @@ from fieldtwin.words import parse_word, words_to_bytes
 if TYPE_CHECKING:
     from fieldtwin.tsx.scm.module import ScmModule
 
-CHANNEL_KEYS = ("channel", "endpoint", "config", "signals")
+CHANNEL_KEYS = ("channel", "endpoint", "config", "signals", "loop")
 
 
 def configure_module(module: ScmModule, table: Mapping[str, Any], where: str) -> None:
@@ -73,6 +75,11 @@ def _channel(module: ScmModule, entry: Any, where: str) -> None:
         raise ConfigError(f"{where}.channel: {channel!r} not allowed (allowed 0 or 1)")
     if "config" in entry:
         _config(module, channel, entry["config"], f"{where}.config")
+    if "loop" in entry:  # SCA2: "point-to-point" or "multipoint" (SCM 5.1 PSR)
+        try:
+            module.set_loop(channel, str(entry["loop"]))
+        except ConfigError as exc:
+            raise ConfigError(f"{where}.loop: {exc}") from None
     for name, level in dict(entry.get("signals", {})).items():
         try:
             module.set_signal(channel, str(name), level)
