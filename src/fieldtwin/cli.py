@@ -47,21 +47,25 @@ def _parser() -> argparse.ArgumentParser:
         "--command", "-c", dest="commands", action="append", help="run this command (repeatable)"
     )
     con.add_argument("--speed", type=_speed, default=1.0, help="pacing while real endpoints exist")
-    tesis = sub.add_parser("tesis", help="the TES parameter workbench", add_help=False)
-    tesis.add_argument("args", nargs=argparse.REMAINDER)
+    sub.add_parser("tesis", help="the TES parameter workbench (fieldtwin tesis --help)")
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    args = _parser().parse_args(argv)
+    words = list(sys.argv[1:] if argv is None else argv)
+    if words[:1] == ["tesis"]:  # the workbench parses its own options (--store, --model...)
+        from fieldtwin.tes.tesis import main as tesis_main
+
+        try:
+            return int(tesis_main(words[1:]))
+        except FieldtwinError as exc:
+            print(f"fieldtwin tesis: {exc}", file=sys.stderr)
+            return 2
+    args = _parser().parse_args(words)
     try:
         if args.command == "run":
             return _run(args)
-        if args.command == "console":
-            return _console(args)
-        from fieldtwin.tes.tesis import main as tesis_main
-
-        return int(tesis_main(list(args.args)))
+        return _console(args)
     except FieldtwinError as exc:
         print(f"fieldtwin: {exc}", file=sys.stderr)
         return 2

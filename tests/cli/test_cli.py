@@ -201,3 +201,17 @@ def test_default_plant_serves_its_two_tes_to_a_modbus_master(tmp_path: Path) -> 
         proc.terminate()
         proc.wait(timeout=10)
     assert proc.returncode == 0
+
+
+def test_tesis_workbench_with_its_own_options(tmp_path: Path) -> None:
+    store = str(tmp_path / "ee.db")
+    base = ["tesis", "--store", store, "--model", "TES 8EA", "--device", "boiler"]
+    done = fieldtwin(*base, "set", "ai0.filter", "16")
+    assert done.returncode == 0, done.stderr
+    shown = fieldtwin(*base, "show")
+    assert shown.returncode == 0, shown.stderr
+    assert "ai0.filter" in shown.stdout and "16" in shown.stdout
+    refused = fieldtwin(*base, "set", "ai0.filter", "1000")
+    assert refused.returncode == 2
+    assert "ai0.filter" in refused.stderr + refused.stdout
+    assert fieldtwin("tesis", "models").returncode == 0
