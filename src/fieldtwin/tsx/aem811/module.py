@@ -26,7 +26,13 @@ from fieldtwin.tsx.aem811.scaling import Measurement, hysteresis, measure
 from fieldtwin.tsx.aem811.sequencer import SLOT_US, Sequencer, Slot
 from fieldtwin.tsx.aem811.thresholds import ThresholdDetector
 from fieldtwin.tsx.module import FaultCategory, IntelligentModule, ModuleContext, ModuleState
-from fieldtwin.tsx.textblock import V_OK_WRITE, Answer, Exchange
+from fieldtwin.tsx.textblock import (
+    ERR_MODULE_FAULT,
+    MODULE_SYSTEM,
+    V_OK_WRITE,
+    Answer,
+    Exchange,
+)
 from fieldtwin.words import set_bit
 
 ACCELERATED_BIT = 8  # OWxy,1,8
@@ -308,6 +314,13 @@ class Aem811(IntelligentModule):
     def on_blocked(self, now: int) -> None:
         self._cancel_event()
         self._acquiring, self._sequencer = None, None
+        # AEM 4.4-1: a blocked module makes no exchange; what it held (a threshold
+        # write, a request sent during the self-test) ends with a module fault
+        self.pending_thresholds = None
+        for key in (requests.CHANNELS, MODULE_SYSTEM):
+            exchange = self.pending_exchange(key)
+            if exchange is not None:
+                exchange.complete(Answer.fault(ERR_MODULE_FAULT), now)
 
     def on_self_test_done(self, now: int) -> None:
         self.refresh_words()

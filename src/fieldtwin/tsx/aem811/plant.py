@@ -24,6 +24,7 @@ from fieldtwin.words import parse_word, words_to_bytes
 if TYPE_CHECKING:
     from fieldtwin.tsx.aem811.module import Aem811
 
+CHANNEL_KEYS = ("channel", "mode", "range", "scaling", "sqrt", "continuity", "high", "low")
 KEYS = ("quantize", "inputs", "faults", "config", "config_words", "threshold0", "threshold1")
 _SCALINGS = {
     "input": Scaling.INPUT_RANGE, "input_range": Scaling.INPUT_RANGE, "a": Scaling.INPUT_RANGE,
@@ -111,6 +112,7 @@ def _config(table: Mapping[str, Any], where: str) -> bytes | None:
     spec = table["config"]
     if not isinstance(spec, Mapping):
         raise ConfigError(f"{where}.config: not a table (e.g. {{ period = 30, channels = [] }})")
+    _known(spec, ("period", "channels"), f"{where}.config")
     words: list[int] = []
     if "period" in spec:
         words += [PERIOD_ID, _int(spec["period"], f"{where}.config.period")]
@@ -125,10 +127,17 @@ def _config(table: Mapping[str, Any], where: str) -> bytes | None:
 def _channel_words(ch: Any, where: str) -> list[int]:
     if not isinstance(ch, Mapping):
         raise ConfigError(f'{where}: not a table (e.g. {{ channel = 0, range = "4/20mA" }})')
+    _known(ch, CHANNEL_KEYS, where)
     channel = _int(ch.get("channel"), f"{where}.channel")
     if not 0 <= channel <= 7:
         raise ConfigError(f"{where}.channel: {channel} (allowed 0..7)")
+    for key in ("sqrt", "continuity"):
+        if key in ch and not isinstance(ch[key], bool):
+            raise ConfigError(f"{where}.{key}: {ch[key]!r} is not true or false")
     if "mode" in ch:
+        clash = sorted(set(ch) & {"range", "scaling", "sqrt", "continuity"})
+        if clash:
+            raise ConfigError(f"{where}.{clash[0]}: give either mode or range/scaling/sqrt")
         mode = _word(ch["mode"], f"{where}.mode")
     else:
         rng = ch.get("range", 0)
@@ -147,7 +156,16 @@ def _channel_words(ch: Any, where: str) -> list[int]:
     words = [0x00C0 | channel, mode]
     if (mode >> 4) & 0xF == Scaling.USER:
         words += [_int(ch.get(k), f"{where}.{k}") & 0xFFFF for k in ("high", "low")]
+    elif "high" in ch or "low" in ch:  # AEM 3.4-3: limits only with User range scaling
+        key = "high" if "high" in ch else "low"
+        raise ConfigError(f"{where}.{key}: limits are only for user scaling (scaling = user)")
     return words
+
+
+def _known(table: Mapping[str, Any], allowed: tuple[str, ...], where: str) -> None:
+    unknown = sorted(set(table) - set(allowed))
+    if unknown:
+        raise ConfigError(f"{where}.{unknown[0]}: unknown key (allowed: {', '.join(allowed)})")
 
 
 def _checked(words: list[int], where: str) -> bytes:
