@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import pytest
+
 from fieldtwin.clock import S
+from fieldtwin.errors import ConfigError
 from tests.tsx.dem24.helpers import (
     JULY_15_1994,
     SLOT,
@@ -155,3 +158,27 @@ def test_sync_output_drives_other_modules() -> None:
     a.sync_pulse()
     plc.advance(0.02)
     assert plc.read(f"I{SLOT},7") == 1 and plc.read("I5,7") == 1
+
+
+def test_5_3_4_post_program_time_setting_from_the_w_table() -> None:
+    # L12: SHL 8(SW56 REM 100) OR SW55 -> W200 ... INC W203; H'FF' AND W203 -> W203;
+    # H'400' -> Txt_2,M; 2 -> Txt_2,C; 0 -> Txt_2,L; EXCHG Txt_2 (AMB-DEM-15)
+    plc, mod = make()
+    for word, value in zip(range(200, 204), JULY_15_1994, strict=True):
+        plc.write(f"W{word}", value)
+    refused = plc.exchange(m=0x0400, c=0x02, table=200, length=0)  # as printed
+    assert refused.v == 0xFD  # no time table reaches the module
+    fault = plc.exchange(m=0x0463, c=0x47, recv_bytes=12)
+    assert fault.data[4] & 0x04  # bit 34 time reference refused: ERR, IWxy,0,7
+    assert plc.exchange(m=0x0400, c=0x02, table=200, length=8).v == 0xFE  # W200(4)
+    assert mod.timebase.pending is not None
+    assert mod.timebase.pending.time.minute == 5 and mod.timebase.pending.indicator == 1
+
+
+def test_7_2_sync_output_drives_at_most_32_modules() -> None:
+    plc, source = make()
+    followers = [plc.insert("TSX DEM 2412", rack=1 + k // 8, slot=k % 8) for k in range(33)]
+    for follower in followers[:32]:
+        source.connect_sync_output(follower)
+    with pytest.raises(ConfigError, match="at most 32"):
+        source.connect_sync_output(followers[32])

@@ -6,7 +6,8 @@ input keeps its state.  A change is accepted once the level has held for the
 hardware filter (500 us, 1.2-1) and the software filter FILT (0/10/20/50 ms, 3.2-1),
 whichever is longer; the change is time-stamped at its edge, to the millisecond of
 the module clock.  Signals say when they next change: the bank schedules exactly
-those edges (DESIGN rule 3) and nothing else.
+those edges (DESIGN rule 3), and for voltages the instant a type 1 limit is crossed,
+between breakpoints too (:mod:`fieldtwin.tsx.dem24.crossing`).
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from dataclasses import dataclass
 from fieldtwin.clock import MS, Handle, SimClock
 from fieldtwin.errors import ConfigError
 from fieldtwin.signals import AnalogSignal, DiscreteSignal
+from fieldtwin.tsx.dem24.crossing import next_event
 
 CHANNELS = 24
 HARDWARE_FILTER_US = 500
@@ -127,8 +129,12 @@ class InputBank:
     def _follow(self, channel: int, t: int) -> None:
         ch = self._ch[channel]
         assert ch.signal is not None
-        self.set_value(channel, ch.signal.value_at(t), t)  # volts at breakpoints only
-        nxt = ch.signal.next_change(t)
+        value = ch.signal.value_at(t)
+        self.set_value(channel, value, t)
+        if isinstance(value, bool):
+            nxt = ch.signal.next_change(t)
+        else:  # volts: judged at the instant they cross a type 1 limit (7.2)
+            nxt = next_event(ch.signal, t, ch.raw, self.thresholds)  # type: ignore[arg-type]
         ch.signal_handle = (
             None
             if nxt is None

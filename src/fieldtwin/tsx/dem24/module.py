@@ -11,14 +11,12 @@ from __future__ import annotations
 
 from typing import Any, ClassVar
 
-from fieldtwin.clock import Handle, S
+from fieldtwin.clock import Handle
 from fieldtwin.errors import ConfigError
 from fieldtwin.tsx.dem24 import requests
-from fieldtwin.tsx.dem24.civil import CivilTime
 from fieldtwin.tsx.dem24.config import (
     DEFAULT_CONFIG,
     FB_CONFIG_REFUSED,
-    FB_STACK_FULL,
     FB_SUPPLY,
     FB_SYNC,
     FB_TERMINAL,
@@ -32,34 +30,24 @@ from fieldtwin.tsx.dem24.inputs import (
     Thresholds,
     check_channel,
 )
+from fieldtwin.tsx.dem24.logbook import OW1_OVERALL, OW1_PURGE, Logbook
 from fieldtwin.tsx.dem24.oscillation import Detector
 from fieldtwin.tsx.dem24.oscillation import Thresholds as OscThresholds
 from fieldtwin.tsx.dem24.stack import (
     CH_SUPPLY,
     CH_SYNC,
     CH_TERMINAL,
-    NEARLY_FULL,
     STATE_OSCILLATING,
-    Message,
     MessageStack,
-    MessageType,
-    change_body,
-    overall_body,
 )
 from fieldtwin.tsx.dem24.sync import SYNC_OUTPUT_MAX, PulseSource, announce
 from fieldtwin.tsx.dem24.timebase import SyncOutcome, Timebase
-from fieldtwin.tsx.module import FaultCategory, IntelligentModule, ModuleContext, ModuleState
+from fieldtwin.tsx.module import FaultCategory, ModuleContext, ModuleState
 from fieldtwin.tsx.textblock import Exchange
 from fieldtwin.words import get_bit
 
-# Discrete input bits Ixy,i (DEM 2.4-2 reconstructed, AMB-DEM-01)
-I_READY, I_NOT_EMPTY, I_NEARLY_FULL, I_SATURATED, I_SYNC_FAULT, I_PULSE = 0, 1, 2, 3, 4, 7
 
-# OWxy,1 command bits (DEM 2.4-3, 4.2-1, AMB-DEM-03)
-OW1_STOP, OW1_PURGE, OW1_OVERALL = 0, 1, 2
-
-
-class Dem24Core(IntelligentModule):
+class Dem24Core(Logbook):
     """The time-stamping function; :class:`Dem24` adds the console and plant-file side."""
 
     type_name: ClassVar[str] = "TSX DEM 24"
@@ -88,6 +76,7 @@ class Dem24Core(IntelligentModule):
         self._osc_handles: list[Handle | None] = [None] * CHANNELS
         self._loss: Handle | None = None
         self._periodic: Handle | None = None
+        self._periodic_due_ms: int | None = None
         self.pulse_image = False
         self.terminal_block = True  # fitted
         self.supply = True  # external supply present
@@ -108,7 +97,7 @@ class Dem24Core(IntelligentModule):
         self.inputs.set_value(check_channel(channel), value, self.clock.now)
 
     def set_signal(self, channel: int, signal: InputSignal | None) -> None:
-        """Drive an input from a signal (bools, or volts judged at its breakpoints)."""
+        """Drive an input from a signal (bools, or volts switched where they cross a limit)."""
         self.inputs.attach(check_channel(channel), signal)
 
     def sync_pulse(self) -> None:
@@ -137,6 +126,7 @@ class Dem24Core(IntelligentModule):
         """Make the module clock fast (> 0) or slow by ``ppm`` (DEM 7.2: within 25 ppm)."""
         self.clock_drift_ppm = float(ppm)
         self.timebase.clock.set_drift(self.clock_drift_ppm, self.clock.now)
+        self._arm_periodic(self.clock.now)
 
     def set_terminal_block(self, fitted: bool) -> None:
         """Fit or remove the TSX BLK4 terminal block (DEM 4.3, 7.2 monitoring)."""
@@ -161,6 +151,7 @@ class Dem24Core(IntelligentModule):
         self.stack = MessageStack()
         self.detectors = None
         self._osc_handles = [None] * CHANNELS
+        self._periodic_due_ms = None
         self.pulse_image = False
         self.inputs.stop()
         self.inputs.reset_levels()
@@ -242,6 +233,7 @@ class Dem24Core(IntelligentModule):
         self.pulse_image = not self.pulse_image  # DEM 2.4-2 note: Ixy,7 changes at each pulse
         self._sync_outcome(self.timebase.pulse(now), now)
         self._arm_loss()
+        self._arm_periodic(now)  # the pulse may have reset the module clock
 
     def _arm_loss(self) -> None:
         if self._loss is not None:
@@ -261,24 +253,8 @@ class Dem24Core(IntelligentModule):
             self._log_change(CH_SYNC, int(outcome.fault), self._stamp(now))
         if outcome.time_set:
             self.log_overall(now)  # DEM 4.2-3: first message after the time is set
-            self._start_periodic(now)  # PER counted from the time setting
+            self._start_periodic(now)  # PER counted in module time from the time setting
         self._refresh_words()
-
-    def _start_periodic(self, now: int) -> None:
-        if self._periodic is not None:
-            self._periodic.cancel()
-            self._periodic = None
-        if self.config.periodic and self.state is not ModuleState.OFF:
-            period = self.config.per_min * 60 * S
-            self._periodic = self.call_later(period, self._periodic_log)
-
-    def _periodic_log(self, now: int) -> None:
-        self._periodic = None
-        self.log_overall(now)  # DEM 3.2-1 PER: overall state every PER minutes
-        self._start_periodic(now)
-
-    def _stamp(self, t: int) -> int | None:
-        return self.timebase.clock.ms(t) if self.timebase.ready else None
 
     # --- inputs -------------------------------------------------------------------------
 
@@ -315,10 +291,6 @@ class Dem24Core(IntelligentModule):
         else:
             self._schedule_osc_check(channel)
 
-    def _readable(self) -> bool:
-        """Inputs read: terminal block fitted, monitored supply present (DEM 2.5-6)."""
-        return self.terminal_block and (self.supply or not self.config.supply_monitoring)
-
     def _update_reading(self, now: int, *, silent: bool = False) -> None:
         if self.state is not ModuleState.OPERATIONAL:
             return
@@ -336,89 +308,3 @@ class Dem24Core(IntelligentModule):
             self._log_change(channel, int(active), self._stamp(now))  # AMB-DEM-19
         self._update_reading(now)
         self._refresh_words()
-
-    # --- logging -------------------------------------------------------------------------
-
-    @property
-    def logging(self) -> bool:
-        """Messages enter the stack (DEM 2.5-1, 3.4-3, 4.2-3 global stop)."""
-        return (
-            self.timebase.ready
-            and not self.awaiting_configuration
-            and not get_bit(self.ow[1], OW1_STOP)
-        )
-
-    def selected(self) -> int:
-        """Channels to time-stamp: OWxy,2 (0..15) and OWxy,3 bits 0..7 (DEM 3.2-2)."""
-        return self.ow[2] | ((self.ow[3] & 0xFF) << 16)
-
-    def _log(self, message_type: MessageType, stamp: int | None, body: Any) -> None:
-        if stamp is None or not self.logging or self.state is not ModuleState.OPERATIONAL:
-            return
-        message = Message(
-            message_type,
-            CivilTime.from_ms(stamp),
-            self.timebase.fault,
-            self.timebase.indicator,
-            self.rack,
-            self.slot,
-            body,
-        )
-        self.stack.push(message)
-        self.set_fault(FB_STACK_FULL, self.stack.full)
-
-    def _log_change(self, channel: int, state: int, stamp: int | None) -> None:
-        if channel < CHANNELS and not (self.selected() >> channel) & 1:
-            return  # DEM 3.2-2: channels not selected behave like discrete inputs
-        self._log(MessageType.CHANGE, stamp, change_body(channel, state))
-
-    def log_overall(self, now: int) -> None:
-        """A type 1 message: selection, oscillating channels, states, faults (DEM 4.2-2)."""
-        oscillating = 0
-        if self.detectors is not None:
-            oscillating = sum(int(d.oscillating) << i for i, d in enumerate(self.detectors))
-        faults = (
-            self.timebase.fault,
-            not self.terminal_block,
-            self.fault_active(FB_SUPPLY),
-        )
-        body = overall_body(self.selected(), oscillating, self.image(), faults)
-        self._log(MessageType.OVERALL, self._stamp(now), body)
-        self._refresh_words()
-
-    def read_messages(self, count: int) -> list[Message]:
-        """Remove and return up to ``count`` messages, oldest first (DEM 4.2-3)."""
-        messages = self.stack.pop(count)
-        self.set_fault(FB_STACK_FULL, self.stack.full)
-        self._refresh_words()
-        return messages
-
-    # --- words and bits ------------------------------------------------------------------
-
-    def image(self) -> int:
-        """IWxy,6/7: the inputs, or their fallback while unreadable (DEM 3.2-1 DEF)."""
-        if self._readable() or self.config.maintain:
-            return self.inputs.levels()
-        return 0
-
-    def _refresh_words(self) -> None:
-        if self.state is ModuleState.OFF:
-            return
-        ready = self.timebase.ready
-        count = len(self.stack)
-        iw2 = self.diag_word
-        iw2 |= int(not self.logging) << 0  # DEM 2.4-3 IWxy,2,0: 1 = no logging
-        iw2 |= int(ready) << 7
-        iw2 |= int(self.fault_active(FB_SUPPLY)) << 8
-        iw2 |= int(self.default_config) << 0xD
-        image = self.image()
-        self.iw[2], self.iw[5] = iw2, count
-        self.iw[6], self.iw[7] = image & 0xFFFF, image >> 16
-        self.i_bits = (
-            (int(ready) << I_READY)
-            | (int(count > 0) << I_NOT_EMPTY)
-            | (int(count >= NEARLY_FULL) << I_NEARLY_FULL)
-            | (int(self.stack.full) << I_SATURATED)
-            | (int(self.timebase.fault) << I_SYNC_FAULT)
-            | (int(self.pulse_image) << I_PULSE)
-        )

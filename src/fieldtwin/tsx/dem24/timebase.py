@@ -78,6 +78,17 @@ class ModuleClock:
         """Module time at simulated time ``t``, to the millisecond (DEM 2.1-2)."""
         return self.module_us(t) // 1000
 
+    def when(self, value_ms: int, now: int) -> int:
+        """The first simulated time >= ``now`` at which the clock reads ``value_ms``."""
+        rate = 1_000_000_000 + self._ppb
+        t = self._base_t + -(-(value_ms * 1000 - self._base_mod) * 1_000_000_000 // rate)
+        t = max(now, t)
+        while t > now and self.ms(t - 1) >= value_ms:  # integer rounding: the earliest
+            t -= 1
+        while self.ms(t) < value_ms:
+            t += 1
+        return t
+
     def set_ms(self, t: int, value_ms: int) -> None:
         self._base_t, self._base_mod = t, value_ms * 1000
 
