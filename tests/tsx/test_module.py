@@ -130,6 +130,17 @@ def test_blocking_fault_takes_the_module_out_of_service() -> None:
     assert r.e and r.s == 4  # module fault
 
 
+def test_blocking_fault_ends_held_exchanges_as_module_fault() -> None:
+    plc, mod = make()
+    plc.advance(2.1)
+    tb = plc.start_exchange(m=M, c=0x02)
+    plc.advance(0.05)
+    assert mod.held and not tb.done
+    mod.set_fault(0, True)
+    plc.advance(0.02)
+    assert tb.result is not None and tb.result.e and tb.result.s == 4
+
+
 def test_hardware_fault_found_by_the_initial_self_test() -> None:
     plc, mod = make()
     mod.hardware_fault(CONVERTER)
@@ -143,11 +154,11 @@ def test_hardware_fault_found_by_the_initial_self_test() -> None:
 def test_wrong_declared_code_sets_the_fault_bit() -> None:
     plc, mod = make(code=901)
     plc.advance(2.1)
-    assert plc.read("I5,S") == 1
+    assert plc.read("I5,S") == 1 and plc.read("IW5,0,8") == 1  # "incorrectly coded"
     assert "declared code" in mod.status()["code"]
     plc2, _ = make(code=900)
     plc2.advance(2.1)
-    assert plc2.read("I5,S") == 0
+    assert plc2.read("I5,S") == 0 and plc2.read("IW5,0,8") == 0
     plc3, _ = make(model="TSX 47-20", code=90)
     plc3.advance(2.1)
     assert plc3.read("I3,S") == 0
@@ -158,7 +169,7 @@ def test_removal_and_insertion_under_power() -> None:
     plc.advance(2.1)
     plc.remove(0, 5)
     plc.advance(0.02)
-    assert plc.read("I5,S") == 1 and plc.read("IW5,0") == 0
+    assert plc.read("I5,S") == 1 and plc.read("IW5,0") == 0x0100  # bit 8: module absent
     assert mod.leds() == Leds(False, False, False)
     plc.reinsert(0, 5)
     plc.advance(0.02)

@@ -27,7 +27,7 @@ from fieldtwin.errors import ConfigError, ProtocolError
 from fieldtwin.tsx.bus import BusImage, Leds, ModuleContext, ModuleEvent, ModuleState
 from fieldtwin.tsx.faults import FaultCategory, FaultLatches
 from fieldtwin.tsx.messages import MessageInterface
-from fieldtwin.tsx.textblock import ERR_POWER_BREAK, V_ERROR, Answer, Exchange
+from fieldtwin.tsx.textblock import ERR_MODULE_FAULT, ERR_POWER_BREAK, V_ERROR, Answer, Exchange
 from fieldtwin.words import get_bit, set_bit
 
 # IWxy,0 standard status word (AEM 4.4-1 and the quick reference)
@@ -176,6 +176,10 @@ class IntelligentModule(MessageInterface):
                 self._dispatch(exchange, now)
 
     def _block(self, now: int) -> None:
+        # SCM 6.4: a blocking fault "stops the user program from accessing the module
+        # through the Text block": what the module held ends as a module fault.
+        for exchange in list(self._exchanges.values()):
+            exchange.complete(Answer.fault(ERR_MODULE_FAULT), now)
         self.on_blocked(now)
 
     def _power_down(self, now: int) -> None:
@@ -345,7 +349,9 @@ class IntelligentModule(MessageInterface):
         word = set_bit(word, ST_MODULE_FAULT, module)
         word = set_bit(word, ST_APPLICATION_FAULT, application)
         word = set_bit(word, ST_GENERAL_FAULT, module or application)
-        word = set_bit(word, ST_BLOCKING_FAULT, self.state is ModuleState.BLOCKED)
+        # AEM 4.4-1: "Blocking fault, or module absent or incorrectly coded"
+        blocked = self.state is ModuleState.BLOCKED or not self.code_ok
+        word = set_bit(word, ST_BLOCKING_FAULT, blocked)
         word = set_bit(word, ST_SELF_TEST, self.state is ModuleState.SELF_TEST)
         tb = self.terminal_block_fault_bit
         word = set_bit(word, ST_TERMINAL_BLOCK, tb is not None and self.fault_active(tb))

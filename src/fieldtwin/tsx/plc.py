@@ -63,6 +63,9 @@ _W_RE = re.compile(
 )  # a shorter break does not restart the modules (manual-notes)
 
 
+ABSENT = BusImage((1 << 8,) + (0,) * 7, 0, True)  # what an empty slot reads
+
+
 @dataclass(slots=True)
 class _Slot:
     module: IntelligentModule
@@ -219,8 +222,8 @@ class Plc:
 
     def _refresh(self, entry: _Slot, registers: bool, now: int) -> None:
         module = entry.module
-        if not entry.present:
-            entry.image = BusImage((0,) * 8, 0, True)
+        if not entry.present:  # AEM 4.4-1: IWxy,0,8 "module absent", Ixy,S
+            entry.image = ABSENT
             return
         if registers:
             module.bus_write(entry.ow, entry.o_bits, now)
