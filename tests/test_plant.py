@@ -96,3 +96,21 @@ def test_missing_file_is_named(tmp_path: Path) -> None:
 def test_speed_from_the_plant_file(tmp_path: Path) -> None:
     assert load_plant(write(tmp_path, "[run]\nspeed = 'max'\n[plc]\n")).speed is None
     assert load_plant(write(tmp_path, "[run]\nspeed = 10\n[plc]\n")).speed == 10.0
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        (
+            f"[[module]]\ntype = '{DOUBLE}'\nrack = 9\nslot = 1",
+            "module[0].rack: rack 9 out of range",
+        ),
+        ("[run]\nspeed = nan", "run.speed: nan not allowed"),
+        ("[run]\nspeed = inf", "run.speed: inf not allowed"),
+        ("[run]\nsped = 10", "plant.toml: run: unknown key(s) sped (allowed: speed)"),
+    ],
+)
+def test_more_validation_errors_name_the_field(tmp_path: Path, text: str, message: str) -> None:
+    with pytest.raises(ConfigError) as info:
+        load_plant(write(tmp_path, text))
+    assert message in str(info.value)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import signal
 import sys
 from collections.abc import Sequence
@@ -13,6 +14,8 @@ from fieldtwin import __version__
 from fieldtwin.clock import S, SimClock
 from fieldtwin.errors import FieldtwinError
 
+SUPPRESS_SPEED: Any = object()  # --speed not given: the plant's [run] speed decides
+
 
 def _speed(text: str) -> float | None:
     if text.lower() in ("max", "fast", "0"):
@@ -21,8 +24,18 @@ def _speed(text: str) -> float | None:
         value = float(text.lower().lstrip("x"))
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r}: a speed factor (1, 10, x10) or max") from None
-    if value <= 0:
+    if not 0 < value < math.inf:
         raise argparse.ArgumentTypeError(f"{text!r}: the speed factor must be > 0")
+    return value
+
+
+def _seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not 0 <= value < math.inf:
+        raise argparse.ArgumentTypeError(f"{text!r}: simulated seconds (a number >= 0)")
     return value
 
 
@@ -34,11 +47,16 @@ def _parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="bring a plant to life in real time")
     run.add_argument("plant", nargs="?", help="plant file (TOML); default: the embedded plant")
-    run.add_argument("--speed", type=_speed, default=1.0, help="x1 (default), x10, or max")
-    run.add_argument("--duration", type=float, help="stop after this many simulated seconds")
+    run.add_argument(
+        "--speed",
+        type=_speed,
+        default=SUPPRESS_SPEED,
+        help="x1, x10, or max (default: the plant's [run] speed, else x1)",
+    )
+    run.add_argument("--duration", type=_seconds, help="stop after this many simulated seconds")
     run.add_argument("--no-live", action="store_true", help="no live view, plain status lines")
     run.add_argument(
-        "--status-every", type=float, default=0.0, help="with --no-live: status every N sim. s"
+        "--status-every", type=_seconds, default=0.0, help="with --no-live: status every N sim. s"
     )
     con = sub.add_parser("console", help="the programming terminal")
     con.add_argument("plant", nargs="?", help="plant file (TOML); default: the embedded plant")
@@ -46,7 +64,12 @@ def _parser() -> argparse.ArgumentParser:
     con.add_argument(
         "--command", "-c", dest="commands", action="append", help="run this command (repeatable)"
     )
-    con.add_argument("--speed", type=_speed, default=1.0, help="pacing while real endpoints exist")
+    con.add_argument(
+        "--speed",
+        type=_speed,
+        default=SUPPRESS_SPEED,
+        help="pacing while real endpoints exist: x1, x10, or max (default: [run] speed, else x1)",
+    )
     sub.add_parser("tesis", help="the TES parameter workbench (fieldtwin tesis --help)")
     return parser
 
@@ -69,6 +92,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except FieldtwinError as exc:
         print(f"fieldtwin: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # Ctrl-C while loading or opening endpoints: no traceback
+        print("fieldtwin: interrupted", file=sys.stderr)
+        return 130
 
 
 def _module_endpoints(plant: Any) -> list[str]:
@@ -81,17 +107,19 @@ def _module_endpoints(plant: Any) -> list[str]:
 
 def _run(args: argparse.Namespace) -> int:
     from fieldtwin.live import plain_status, render
-    from fieldtwin.plant import load_plant
+    from fieldtwin.plant import build_plant, plant_speed, read_plant
     from fieldtwin.runtime.runner import Runner
 
+    plant_file = read_plant(args.plant)
+    speed = plant_speed(plant_file) if args.speed is SUPPRESS_SPEED else args.speed
     clock = SimClock()
-    runner = Runner(clock, args.speed)
-    plant = load_plant(args.plant, runner=runner, speed=args.speed)
+    runner = Runner(clock, speed)
+    plant = build_plant(plant_file, runner=runner, speed=speed)
     endpoints = plant.start_endpoints(runner) + _module_endpoints(plant)
     for line in endpoints:
         print(line, flush=True)
     print(
-        f"running {plant.title} at {'max speed' if args.speed is None else f'x{args.speed:g}'}",
+        f"running {plant.title} at {'max speed' if speed is None else f'x{speed:g}'}",
         flush=True,
     )
     signal.signal(signal.SIGTERM, lambda *_: runner.stop())
@@ -114,9 +142,9 @@ def _run(args: argparse.Namespace) -> int:
             from rich.live import Live
 
             with Live(render(plant, endpoints), refresh_per_second=5) as live_view:
-                runner.run_forever(tick, tick_us=_tick(args.speed))
+                runner.run_forever(tick, tick_us=_tick(speed))
         else:
-            runner.run_forever(tick, tick_us=_tick(args.speed))
+            runner.run_forever(tick, tick_us=_tick(speed))
     finally:
         plant.close()
     print(f"stopped at t = {clock.now / S:.3f} s", flush=True)
@@ -129,9 +157,10 @@ def _tick(speed: float | None) -> int:
 
 def _console(args: argparse.Namespace) -> int:
     from fieldtwin.console import Console, run_script
-    from fieldtwin.plant import load_plant
+    from fieldtwin.plant import FROM_PLANT, load_plant
 
-    plant = load_plant(args.plant, speed=args.speed)
+    speed = FROM_PLANT if args.speed is SUPPRESS_SPEED else args.speed
+    plant = load_plant(args.plant, speed=speed)
     console = Console(plant)
     if args.commands:
         return run_script(console, args.commands, sys.stdout, sys.stderr, "-c")

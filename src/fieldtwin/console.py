@@ -7,16 +7,30 @@ message names the token at fault and what is allowed.
 
 from __future__ import annotations
 
-import shlex
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable
 from typing import Any, TextIO
 
 from fieldtwin.clock import S
+from fieldtwin.console_syntax import (
+    canonical_name,
+    channel_number,
+    integer,
+    latin1,
+    looks_like_object,
+    module_address,
+    next_value,
+    one_argument,
+    parse_duration,
+    result_lines,
+    split_line,
+    value_of,
+)
 from fieldtwin.errors import ConfigError, FieldtwinError
 from fieldtwin.plant import Plant
 from fieldtwin.signals import signal_from_spec
-from fieldtwin.tsx.addressing import format_object, parse_module, parse_object
+from fieldtwin.tsx.addressing import parse_object
 from fieldtwin.tsx.plc import Plc
+from fieldtwin.tsx.txt import ExchangeTimeout
 from fieldtwin.words import format_hex, parse_word
 
 HELP = {
@@ -38,41 +52,11 @@ HELP = {
     "remove": "remove MODULE             pull a module out under power",
     "insert": "insert MODULE             put it back (it runs its self-test)",
     "plc": "plc run|stop|cold|hot     PLC mode, cold restart (SY0), hot restart (SY1)",
+    "txt": "txt I [reset]             a Text Block's outputs; reset ends its exchange (TXTi,S = 1)",
     "tes": "tes SLAVE read ADDR [N] | write ADDR VALUE | input I VALUE | power-cycle",
     "help": "help [COMMAND]",
     "quit": "quit",
 }
-
-_UNITS = {"us": 1e-6, "ms": 1e-3, "s": 1.0, "min": 60.0, "h": 3600.0}
-
-
-def parse_duration(token: str) -> float:
-    """'11', '250ms', '2min', '1.5s' -> seconds."""
-    text = token.strip().lower()
-    for unit in sorted(_UNITS, key=len, reverse=True):
-        if text.endswith(unit):
-            number, factor = text[: -len(unit)], _UNITS[unit]
-            break
-    else:
-        number, factor = text, 1.0
-    try:
-        value = float(number) * factor
-    except ValueError:
-        raise ConfigError(f"{token!r} is not a duration (e.g. 11, 1.5s, 250ms, 2min)") from None
-    if value < 0:
-        raise ConfigError(f"{token!r}: a duration cannot be negative")
-    return value
-
-
-def _value(token: str) -> Any:
-    for cast in (int, float):
-        try:
-            return cast(token)
-        except ValueError:
-            pass
-    if token.lower() in ("true", "false"):
-        return token.lower() == "true"
-    return token
 
 
 class Console:
@@ -95,6 +79,7 @@ class Console:
             "remove": self._remove,
             "insert": self._insert,
             "plc": self._plc_mode,
+            "txt": self._txt,
             "tes": self._tes,
             "help": self._help,
         }
@@ -108,7 +93,7 @@ class Console:
     def execute(self, line: str) -> list[str]:
         """Run one command line; returns its output lines."""
         try:
-            words = _split(line)
+            words = split_line(line)
         except ValueError as exc:
             raise ConfigError(f"cannot split {line.strip()!r}: {exc}") from None
         if not words:
@@ -119,7 +104,7 @@ class Console:
         command = self._commands.get(name)
         if command is not None:
             return command(args)
-        if _looks_like_object(words[0]):
+        if looks_like_object(words[0]):
             return self._read(words)
         raise ConfigError(f"unknown command {words[0]!r} (allowed: {', '.join(HELP)})")
 
@@ -128,7 +113,7 @@ class Console:
     def _read(self, args: list[str]) -> list[str]:
         if not args:
             raise ConfigError("read: name at least one object, e.g. read IW5,0")
-        return [f"{_canonical(name)} = {self._show(name)}" for name in args]
+        return [f"{canonical_name(name)} = {self._show(name)}" for name in args]
 
     def _show(self, name: str) -> str:
         value = self.plc.read(name)
@@ -141,8 +126,8 @@ class Console:
         if len(args) != 2:
             raise ConfigError("write: takes OBJECT VALUE, e.g. write OW5,0,C 1")
         name, token = args
-        self.plc.write(name, parse_word(token) if not token.startswith("-") else int(token))
-        return [f"{_canonical(name)} = {self._show(name)}"]
+        self.plc.write(name, parse_word(token))
+        return [f"{canonical_name(name)} = {self._show(name)}"]
 
     # --- Text Blocks -----------------------------------------------------------
 
@@ -150,7 +135,7 @@ class Console:
         if len(args) < 2:
             raise ConfigError('exchange: takes M C [send W...] [text "..."] [recv N] ...')
         m, c = parse_word(args[0]), parse_word(args[1])
-        options: dict[str, Any] = {"recv_bytes": 0}
+        options: dict[str, str] = {}
         send: list[int] = []
         it = iter(args[2:])
         mode = None
@@ -159,7 +144,7 @@ class Console:
             if key in ("send", "text", "recv", "txt", "timeout", "length"):
                 mode = key
                 if key != "send":
-                    options[key] = _next(it, token)
+                    options[key] = next_value(it, token)
                 continue
             if mode != "send":
                 raise ConfigError(
@@ -167,28 +152,37 @@ class Console:
                     " recv N, txt I, timeout S)"
                 )
             send.append(parse_word(token))
-        txt = int(options.pop("txt", 0))
-        kwargs: dict[str, Any] = {"recv_bytes": int(options.pop("recv", options["recv_bytes"]))}
-        options.pop("recv_bytes")
+        txt = integer(options.pop("txt", "0"), "exchange txt")
+        recv = options.pop("recv", None)
+        kwargs: dict[str, Any] = {"recv_bytes": 0 if recv is None else integer(recv, "recv")}
         if "text" in options:
-            kwargs["send_bytes"] = options.pop("text").encode("latin-1")
+            kwargs["send_bytes"] = latin1(options.pop("text"))
         else:
             kwargs["send"] = send
         if "length" in options:
-            kwargs["length"] = int(options.pop("length"))
+            kwargs["length"] = integer(options.pop("length"), "exchange length")
         if "timeout" in options:
             kwargs["timeout_s"] = parse_duration(options.pop("timeout"))
-        result = self.plc.exchange(m, c, txt=txt, **kwargs)
-        name = f"TXT{txt}"
-        lines = [
-            f"{name},{result.report_name} = {format_hex(result.v)}  {name},S = {result.s}"
-            f"  {name},E = {int(result.e)}" + (f"  ({result.error_text})" if result.e else "")
-        ]
-        if result.data:
-            lines.append("data = " + " ".join(format_hex(w) for w in result.words))
-            printable = "".join(chr(b) if 32 <= b < 127 else "." for b in result.data)
-            lines.append(f"text = {printable!r}")
-        return lines
+        try:
+            result = self.plc.exchange(m, c, txt=txt, **kwargs)
+        except ExchangeTimeout as exc:
+            raise ExchangeTimeout(
+                f"{exc}; 'txt {txt}' shows it, 'txt {txt} reset' ends it"
+            ) from None
+        return result_lines(txt, result)
+
+    def _txt(self, args: list[str]) -> list[str]:
+        if not args or len(args) > 2 or (len(args) == 2 and args[1].lower() != "reset"):
+            raise ConfigError("txt: takes I [reset], e.g. txt 0 reset")
+        index = integer(args[0], "txt")
+        if index < 0:
+            raise ConfigError(f"txt: {args[0]!r} not allowed (allowed 0 or more)")
+        if len(args) == 2:  # the Text Block's R input
+            self.plc.reset_text_block(index)
+        tb = self.plc.text_block(index)
+        if tb.result is None or not tb.done:
+            return [f"TXT{index}: {tb.state.value}"]
+        return result_lines(index, tb.result)
 
     # --- time ----------------------------------------------------------------------
 
@@ -208,7 +202,7 @@ class Console:
     # --- modules ---------------------------------------------------------------------
 
     def _module(self, token: str) -> Any:
-        rack, slot = _module_address(token)
+        rack, slot = module_address(token)
         return self.plc.module(rack, slot)
 
     def _status(self, args: list[str]) -> list[str]:
@@ -230,7 +224,7 @@ class Console:
         if len(args) != 3:
             raise ConfigError("input: takes MODULE CHANNEL VALUE, e.g. input 5 0 2.5V")
         module = self._module(args[0])
-        module.console_input(_channel(args[1]), args[2])
+        module.console_input(channel_number(args[1]), args[2])
         return [f"input {module.address} {args[1]} = {args[2]}"]
 
     def _signal(self, args: list[str]) -> list[str]:
@@ -244,11 +238,14 @@ class Console:
             key, sep, value = pair.partition("=")
             if not sep:
                 raise ConfigError(f"signal: {pair!r} is not key=value")
-            spec[key] = _value(value)
+            spec[key] = value_of(value)
         where = f"signal {args[0]} {args[1]}"
         built = signal_from_spec(spec, where=where)
+        setter = getattr(module, "set_signal", None)
         try:
-            module.set_signal(_channel(args[1]), built)
+            if setter is None:
+                raise TypeError(module.type_name)
+            setter(channel_number(args[1]), built)
         except TypeError:
             raise ConfigError(
                 f"{module.type_name} takes no input signals (see its page for 'input')"
@@ -275,12 +272,12 @@ class Console:
         return [f"power back  {self._time()}"]
 
     def _remove(self, args: list[str]) -> list[str]:
-        rack, slot = _module_address(_one(args, "remove MODULE"))
+        rack, slot = module_address(one_argument(args, "remove MODULE"))
         self.plc.remove(rack, slot)
         return [f"module rack {rack} slot {slot} removed"]
 
     def _insert(self, args: list[str]) -> list[str]:
-        rack, slot = _module_address(_one(args, "insert MODULE"))
+        rack, slot = module_address(one_argument(args, "insert MODULE"))
         self.plc.reinsert(rack, slot)
         return [f"module rack {rack} slot {slot} inserted"]
 
@@ -291,7 +288,7 @@ class Console:
             "cold": self.plc.cold_restart,
             "hot": self.plc.hot_restart,
         }
-        mode = _one(args, "plc run|stop|cold|hot").lower()
+        mode = one_argument(args, "plc run|stop|cold|hot").lower()
         if mode not in actions:
             raise ConfigError(f"plc: {mode!r} not allowed (allowed: run, stop, cold, hot)")
         actions[mode]()
@@ -309,7 +306,9 @@ class Console:
         tes, verb, rest = self.plant.tes_by_slave(slave), args[1].lower(), args[2:]
         if verb == "read" and rest:
             start = parse_word(rest[0])
-            count = int(rest[1]) if len(rest) > 1 else 1
+            count = integer(rest[1], "tes read N") if len(rest) > 1 else 1
+            if not 1 <= count <= 256:
+                raise ConfigError(f"tes read: N = {count} not allowed (allowed 1..256)")
             return [
                 f"tes {slave} {format_hex(a, 3)} = {format_hex(tes.read(a))}"
                 for a in range(start, start + count)
@@ -319,7 +318,10 @@ class Console:
             tes.write(address, value)
             return [f"tes {slave} {format_hex(address, 3)} = {format_hex(tes.read(address))}"]
         if verb == "input" and len(rest) == 2:
-            tes.set_input(int(rest[0]), _value(rest[1]))
+            value = value_of(rest[1])
+            if not tes.model.analog_inputs and value in (0, 1):
+                value = bool(value)  # a digital TES: 0 / 1 is a contact, as for modules
+            tes.set_input(integer(rest[0], "tes input"), value)
             return [f"tes {slave} input {rest[0]} = {rest[1]}"]
         if verb == "power-cycle" and not rest:
             tes.power_cycle()
@@ -333,51 +335,6 @@ class Console:
                 raise ConfigError(f"help: unknown command {args[0]!r} (allowed: {', '.join(HELP)})")
             return [HELP[key]]
         return list(HELP.values())
-
-
-def _split(line: str) -> list[str]:
-    """Words, "quoted text" and # comments; H'00A0' keeps its apostrophes."""
-    lexer = shlex.shlex(line, posix=True)
-    lexer.quotes = '"'
-    lexer.whitespace_split = True
-    lexer.commenters = "#"
-    return list(lexer)
-
-
-def _next(it: Iterator[str], token: str) -> str:
-    try:
-        return next(it)
-    except StopIteration:
-        raise ConfigError(f"exchange: {token!r} needs a value") from None
-
-
-def _one(args: list[str], usage: str) -> str:
-    if len(args) != 1:
-        raise ConfigError(f"takes one argument: {usage}")
-    return args[0]
-
-
-def _channel(token: str) -> int:
-    try:
-        return int(token, 0)
-    except ValueError:
-        raise ConfigError(f"{token!r} is not a channel number") from None
-
-
-def _module_address(token: str) -> tuple[int, int]:
-    """'5' -> rack 0 slot 5; '23' -> rack 2 slot 3."""
-    return parse_module(token)
-
-
-def _looks_like_object(token: str) -> bool:
-    head = token.upper()
-    return head.startswith(("IW", "OW", "I", "O", "W")) and any(ch.isdigit() for ch in head)
-
-
-def _canonical(name: str) -> str:
-    if name.upper().startswith("W"):
-        return name.upper()
-    return format_object(parse_object(name))
 
 
 def run_script(

@@ -23,6 +23,7 @@ Errors name the file and the field path: ``plant.toml: module[1].slot: ...``.
 
 from __future__ import annotations
 
+import math
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -35,6 +36,7 @@ from fieldtwin.errors import ConfigError
 from fieldtwin.tsx.plc import MODELS, Plc
 
 DEFAULT_PLANT = "default.toml"
+FROM_PLANT = "from plant"  # build_plant(speed=FROM_PLANT): take [run] speed
 TOP_LEVEL = ("plant", "plc", "module", "tes", "run")
 
 
@@ -114,16 +116,19 @@ def build_plant(
     *,
     clock: SimClock | None = None,
     runner: Any = None,
-    speed: float | None = None,
+    speed: float | str | None = FROM_PLANT,
 ) -> Plant:
-    """Build the PLC, modules and TES of a plant file (endpoints are opened later)."""
+    """Build the PLC, modules and TES of a plant file (endpoints are opened later).
+
+    ``speed``: a factor, None for as fast as possible, or FROM_PLANT for ``[run] speed``.
+    """
     data, name = plant_file.data, plant_file.name
     clock = clock or (runner.clock if runner is not None else SimClock())
-    run = _table(data, "run", name)
-    run_speed = _speed(run.get("speed", 1.0), f"{name}: run.speed")
+    pace = plant_speed(plant_file) if speed == FROM_PLANT else speed
+    assert not isinstance(pace, str)
     title = str(_table(data, "plant", name).get("name", Path(name).stem))
-    plc = _build_plc(plant_file, clock, runner, speed if speed is not None else run_speed)
-    plant = Plant(name, title, clock, plc, speed=speed if speed is not None else run_speed)
+    plc = _build_plc(plant_file, clock, runner, pace)
+    plant = Plant(name, title, clock, plc, speed=pace)
     tes_tables = data.get("tes", [])
     if not isinstance(tes_tables, list):
         raise ConfigError(f"{name}: tes must be an array of tables ([[tes]])")
@@ -133,6 +138,18 @@ def build_plant(
         plant.tes = list(build_tes(tes_tables, clock, name, plant_file.base_dir))
         plant.tes_tables = tes_tables
     return plant
+
+
+def plant_speed(plant_file: PlantFile) -> float | None:
+    """The speed factor of ``[run] speed`` (1 when absent; None for "max")."""
+    name = plant_file.name
+    run = _table(plant_file.data, "run", name)
+    if set(run) - {"speed"}:
+        raise ConfigError(
+            f"{name}: run: unknown key(s) {', '.join(sorted(set(run) - {'speed'}))}"
+            " (allowed: speed)"
+        )
+    return _speed(run.get("speed", 1.0), f"{name}: run.speed")
 
 
 def load_plant(path: str | Path | None = None, **kwargs: Any) -> Plant:
@@ -149,7 +166,8 @@ def _table(data: Mapping[str, Any], key: str, name: str) -> Mapping[str, Any]:
 def _speed(value: Any, where: str) -> float | None:
     if value == "max":
         return None
-    if isinstance(value, bool) or not isinstance(value, int | float) or value <= 0:
+    number = isinstance(value, int | float) and not isinstance(value, bool)
+    if not number or not 0 < value < math.inf:
         raise ConfigError(f'{where}: {value!r} not allowed (allowed a number > 0, or "max")')
     return float(value)
 
@@ -227,7 +245,8 @@ def _insert(plc: Plc, table: Any, where: str, base_dir: Path) -> None:
     try:
         module = plc.insert(type_name, rack=rack, slot=slot, code=code)
     except ConfigError as exc:
-        field_name = "type" if "module type" in str(exc) else "slot"
+        text = str(exc)
+        field_name = "type" if "module type" in text else "rack" if "rack" in text else "slot"
         raise ConfigError(f"{where}.{field_name}: {exc}") from None
     try:
         module.configure_from_plant(rest, where, base_dir)

@@ -3,14 +3,19 @@
 from __future__ import annotations
 
 import io
+import re
+import tempfile
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import tests.tsx.double  # noqa: F401  registers the test double
-from fieldtwin.console import Console, parse_duration, run_script
+from fieldtwin.console import HELP, Console, parse_duration, run_script
 from fieldtwin.errors import ConfigError
 from fieldtwin.plant import load_plant
+from fieldtwin.tsx.txt import ExchangeTimeout
 from tests.tsx.double import DOUBLE
 
 
@@ -110,3 +115,108 @@ def test_durations() -> None:
     assert parse_duration("3") == 3
     with pytest.raises(ConfigError):
         parse_duration("-1")
+
+
+def test_new_errors_are_config_errors(console: Console) -> None:
+    # these escaped as ValueError / OverflowError / UnicodeEncodeError / AttributeError
+    for line, message in [
+        ("exchange 1 2 txt x", "exchange txt: 'x' is not an integer"),
+        ("exchange 1 2 length x", "exchange length: 'x' is not an integer"),
+        ("advance nan", "'nan' is not a duration"),
+        ("advance 1e400", "'1e400' is not a duration"),
+        ('exchange 1 2 text "\u20ac"', "'\u20ac' is not a character the module takes"),
+        ("signal 5 0 step at_s=1 before=0 after=1", "takes no input signals"),
+        ("exchange 1 2 recv -5", "reception capacity -5 not allowed"),
+        ("txt x", "txt: 'x' is not an integer"),
+    ]:
+        with pytest.raises(ConfigError, match=re.escape(message)):
+            console.execute(line)
+
+
+def test_txt_shows_and_resets_a_text_block(console: Console) -> None:
+    console.execute("advance 2.1")
+    with pytest.raises(ExchangeTimeout, match="'txt 2 reset' ends it"):
+        console.execute("exchange H'0563' 2 txt 2 timeout 0.1")  # the double holds code 2
+    assert console.execute("txt 2") == ["TXT2: in module"]
+    assert console.execute("txt 2 reset") == [
+        "TXT2,V = H'0000'  TXT2,S = 1  TXT2,E = 1  (exchange in progress cancelled by reset)"
+    ]
+    assert console.execute("exchange H'0563' H'0F' recv 27 txt 2")[0].startswith("TXT2,V = H'003F'")
+    assert console.execute("txt 2")[0] == "TXT2,V = H'003F'  TXT2,S = 27  TXT2,E = 0"
+
+
+_TOKENS = st.sampled_from(
+    [
+        *HELP,
+        "5",
+        "0",
+        "1",
+        "15",
+        "27",
+        "-1",
+        "x",
+        "nan",
+        "1e400",
+        "H'0563'",
+        "H'0F'",
+        "0x47",
+        "IW5,0",
+        "OW5,0,C",
+        "I5,S",
+        "O5,0",
+        "W100",
+        "W99999",
+        "=",
+        "send",
+        "text",
+        "recv",
+        "txt",
+        "timeout",
+        "length",
+        "reset",
+        "on",
+        "off",
+        "break",
+        "sensor",
+        "sine",
+        "k=v",
+        '"',
+        '"A B"',
+        "#",
+        "250ms",
+        "H'",
+        "IW5,9",
+        "QW5,0",
+    ]
+)
+
+
+@settings(max_examples=300)
+@given(st.one_of(st.lists(_TOKENS, max_size=7).map(" ".join), st.text(max_size=30)))
+def test_any_line_gives_output_or_a_config_error(line: str) -> None:
+    console = _console_for_properties()
+    try:
+        out = console.execute(line)
+    except (ConfigError, ExchangeTimeout):
+        return
+    assert isinstance(out, list) and all(isinstance(text, str) for text in out)
+
+
+_CONSOLE: list[Console] = []
+
+
+def _console_for_properties() -> Console:
+    """One plant for every example (a fresh one would make the test slow)."""
+    if not _CONSOLE:
+        path = Path(tempfile.mkdtemp()) / "plant.toml"
+        path.write_text(f"[plc]\nmodel = 'TSX 87'\n[[module]]\ntype = '{DOUBLE}'\nslot = 5\n")
+        _CONSOLE.append(Console(load_plant(path)))
+    return _CONSOLE[0]
+
+
+def test_tes_digital_input_takes_0_and_1(tmp_path: Path) -> None:
+    path = tmp_path / "tes.toml"
+    path.write_text('[[tes]]\nmodel = "TES 32EST"\nslave = 1\nendpoint = "tcp://127.0.0.1:0"\n')
+    console = Console(load_plant(path))
+    assert console.execute("tes 1 input 3 1") == ["tes 1 input 3 = 1"]
+    assert console.execute("tes 1 input 3 false") == ["tes 1 input 3 = false"]

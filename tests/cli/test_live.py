@@ -1,12 +1,14 @@
-"""The live view renders every part of a plant (rich, recorded off-screen)."""
+"""The live view renders every part of a plant (rich, recorded off-screen); run's options."""
 
 from __future__ import annotations
 
 import io
 from pathlib import Path
 
+import pytest
 from rich.console import Console as RichConsole
 
+from fieldtwin.cli import main
 from fieldtwin.live import plain_status, render
 from fieldtwin.plant import load_plant
 from tests.cli.test_cli import default_plant_copy
@@ -36,3 +38,21 @@ def test_live_view_and_plain_status_show_modules_tes_and_endpoints(tmp_path: Pat
     assert any(line.startswith("slot 5 TSX AEM 811: Run") for line in lines)
     assert any(line.startswith("TES 2 TES 8EA: on  status H'") for line in lines)
     plant.close()
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["run", "--duration", "nan"],
+        ["run", "--duration", "-1"],
+        ["run", "--status-every", "inf"],
+        ["run", "--speed", "nan"],
+        ["run", "--speed", "inf"],
+    ],
+)
+def test_run_rejects_non_finite_times(argv: list[str], capsys: pytest.CaptureFixture[str]) -> None:
+    # `--duration nan` escaped as a ValueError traceback from round()
+    with pytest.raises(SystemExit) as info:
+        main(argv)
+    assert info.value.code == 2
+    assert argv[-1] in capsys.readouterr().err

@@ -16,6 +16,7 @@ from pymodbus.client import ModbusSerialClient, ModbusTcpClient
 from pymodbus.pdu import ExceptionResponse
 
 from fieldtwin.clock import SimClock
+from fieldtwin.modbus.model import Link
 from fieldtwin.runtime.runner import Runner
 from fieldtwin.tes.plant import build_tes, start_tes_endpoints
 
@@ -128,6 +129,28 @@ def test_one_pty_line_shared_by_two_tes() -> None:
             assert not r.isError()  # RS-485 counters of the 4EA
             r = client.read_holding_registers(0x01C, count=1, device_id=5)  # RS-485 good frames
             assert r.registers[0] >= 3  # every frame on the line is counted by every TES
+        finally:
+            client.close()  # type: ignore[no-untyped-call]
+    finally:
+        served.close()
+
+
+def test_a_tcp_gateway_on_the_rs232_port() -> None:
+    """`link = "rs232"` on tcp://: the RS-232 number and counters (§3.1.4, §6.3.5)."""
+    served = Served(
+        [{"model": "TES 32ST", "slave": 9, "endpoint": "tcp://127.0.0.1:0", "link": "rs232"}]
+    )
+    try:
+        assert "slaves 9" in served.lines[0]
+        (tes,) = served.tes
+        assert tes.slave_for(Link.RS485) == 1
+        port = int(re.search(r"tcp://127\.0\.0\.1:(\d+)", served.lines[0]).group(1))  # type: ignore[union-attr]
+        client = ModbusTcpClient("127.0.0.1", port=port, timeout=2, retries=0)
+        try:
+            assert client.connect()  # type: ignore[no-untyped-call]
+            r = client.read_holding_registers(0x017, count=14, device_id=9)
+            assert r.registers[:7] == [0] * 7  # RS-485 counters untouched
+            assert r.registers[7 + 5] == 1  # RS-232 good frames: this request
         finally:
             client.close()  # type: ignore[no-untyped-call]
     finally:

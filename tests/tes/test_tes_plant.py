@@ -9,7 +9,11 @@ import pytest
 
 from fieldtwin.clock import SimClock
 from fieldtwin.errors import ConfigError
+from fieldtwin.modbus.model import Link
+from fieldtwin.tes import Tes
 from fieldtwin.tes.plant import build_tes
+from fieldtwin.tes.serve import line_settings
+from fieldtwin.transports.url import parse_endpoint
 
 from .helpers import pair, read_word
 
@@ -122,3 +126,53 @@ def test_store_prm_jumper_and_faults(tmp_path: Path) -> None:
 def test_an_unpowered_tes(tmp_path: Path) -> None:
     (tes,) = _build(tmp_path, {"model": "TES 4SA", "endpoint": "pty", "faults": {"powered": False}})
     assert not tes.powered
+
+
+def test_3_1_4_slave_is_the_number_on_the_port_link_names(tmp_path: Path) -> None:
+    """§3.1.3 / §3.1.4: each port has its own slave number; `slave` sets the one of `link`."""
+    table = {"model": "TES 8ESA", "slave": 7, "endpoint": "pty", "link": "rs232"}
+    (tes,) = _build(tmp_path, table)
+    assert (tes.slave_for(Link.RS232), tes.slave_for(Link.RS485)) == (7, 1)
+    assert tes.slave == 7 and tes.link is Link.RS232
+    assert tes.eeprom()["rs232.slave"] == 7
+    (rs485,) = _build(tmp_path, {**table, "link": "rs485"})
+    assert (rs485.slave_for(Link.RS232), rs485.slave_for(Link.RS485)) == (1, 7)
+
+
+def test_an_absent_slave_keeps_the_eeprom_number(tmp_path: Path) -> None:
+    store = tmp_path / "eeprom.db"
+    Tes("TES 32ST", store=store, name="st").write_eeprom({"rs485.slave": 12, "rs232.slave": 5})
+    table = {"model": "TES 32ST", "endpoint": "pty", "store": "eeprom.db", "name": "st"}
+    (tes,) = _build(tmp_path, table)
+    assert tes.slave == 12
+    (on_232,) = _build(tmp_path, {**table, "link": "rs232"})
+    assert on_232.slave == 5
+    (fresh,) = _build(tmp_path, {"model": "TES 32ST", "endpoint": "pty"})
+    assert fresh.slave == 1  # §3.1.2 factory slave 1
+
+
+def test_one_endpoint_is_one_port(tmp_path: Path) -> None:
+    a = {"model": "TES 8EA", "slave": 4, "endpoint": "pty"}
+    b = {"model": "TES 32ST", "slave": 5, "endpoint": "pty", "link": "rs232"}
+    with pytest.raises(
+        ConfigError, match=r"^plant\.toml: tes\[1\]\.link: rs232 on pty, where tes\[0\] is on rs485"
+    ):
+        _build(tmp_path, a, b)
+    a["link"] = "rs232"
+    assert len(_build(tmp_path, a, b)) == 2
+
+
+def test_3_1_4_an_rs232_line_takes_the_rs232_format(tmp_path: Path) -> None:
+    """§3.1.4 speed and parity of the RS-232 port; 8 data bits and 1 stop bit are fixed."""
+    store = tmp_path / "eeprom.db"
+    Tes("TES 8ESA", store=store, name="esa").write_eeprom(
+        {"rs232.baud": 19200, "rs232.parity": "O", "rs485.baud": 4800}
+    )
+    table = {"model": "TES 8ESA", "endpoint": "pty", "link": "rs232", "store": "eeprom.db"}
+    (tes,) = _build(tmp_path, {**table, "name": "esa"})
+    settings = line_settings(parse_endpoint("pty"), [tes], Link.RS232)
+    assert (settings.baud, settings.data_bits, settings.parity, settings.stop_bits) == (
+        19200, 8, "O", 1,
+    )  # fmt: skip
+    with pytest.raises(ConfigError, match=r"rs232\.baud / rs232\.parity"):
+        line_settings(parse_endpoint("pty?baud=9600&parity=E"), [tes], Link.RS232)

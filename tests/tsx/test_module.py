@@ -2,12 +2,17 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from fieldtwin.errors import ConfigError, ProtocolError
-from fieldtwin.tsx.module import Leds, ModuleEvent, ModuleState
+from fieldtwin.tsx.module import FaultCategory, Leds, ModuleEvent, ModuleState
 from fieldtwin.tsx.plc import Plc
-from tests.tsx.double import CONVERTER, DOUBLE, SENSOR, Double
+from fieldtwin.tsx.txt import TxtState
+from tests.tsx.double import CONVERTER, DOUBLE, SENSOR, TERMINAL_BLOCK, Double
 
 M = 0x0563  # rack 0 slot 5, module system
 
@@ -235,3 +240,117 @@ def test_inject_unknown_fault_names_the_allowed_ones() -> None:
     plc, mod = make()
     with pytest.raises(ConfigError, match="allowed: terminal_block, sensor"):
         mod.inject_fault("smoke", True)
+
+
+def test_blocking_fault_during_the_self_test_ends_it_blocked() -> None:
+    # AEM 7.1-1: a processing-circuit fault leaves the module out of service; the end
+    # of the self-test must not bring it back (it raised ProtocolError from the clock)
+    plc, mod = make()
+    plc.advance(0.5)
+    mod.set_fault(0, True)
+    plc.advance(3.0)
+    assert mod.state is ModuleState.BLOCKED
+    assert plc.read("IW5,0,8") == 1 and plc.read("IW5,0,3") == 0 and plc.read("IW5,0,9") == 0
+
+
+def test_outputs_reach_the_module_again_after_a_long_power_break() -> None:
+    # AEM 2.5-3: the module restarts from nothing; the PLC's output image is the same,
+    # so the first refresh after power return must still deliver it
+    plc, mod = make()
+    plc.advance(2.1)
+    plc.write("OW5,1", 5)
+    plc.write("O5,1", 1)
+    plc.advance(0.02)
+    assert plc.read("I5,0") == 1
+    plc.power_break(0.5)
+    plc.advance(2.1)
+    assert (plc.read("I5,0"), plc.read("IW5,1"), mod.o_bits) == (1, 5, 0b10)
+
+
+# --- property: any sequence of events ends in a legal state (DESIGN rule 12) ---------
+
+_BITS = (0, TERMINAL_BLOCK, CONVERTER, SENSOR, SENSOR + 9)  # blocking, module x2, app x2
+_OPS = st.one_of(
+    st.tuples(st.just("advance"), st.sampled_from((0.004, 0.01, 0.5, 2.5))),
+    st.tuples(st.just("break"), st.sampled_from((0.005, 0.5))),
+    st.tuples(st.sampled_from(("remove", "reinsert", "cold", "stop", "start")), st.just(0)),
+    st.tuples(st.just("fault"), st.sampled_from(_BITS), st.booleans()),
+    st.tuples(st.just("hardware"), st.sampled_from((0, CONVERTER)), st.booleans()),
+    st.tuples(st.just("write"), st.sampled_from(("OW5,0,C", "OW5,0,2")), st.integers(0, 1)),
+    st.tuples(st.just("txt"), st.integers(0, 2), st.sampled_from((0x47, 0x0F, 0x02))),
+    st.tuples(st.just("reset"), st.integers(0, 2)),
+)
+
+
+def _apply(plc: Plc, mod: Double, op: tuple[Any, ...]) -> None:
+    kind = op[0]
+    simple = {"remove": lambda: plc.remove(0, 5), "reinsert": lambda: plc.reinsert(0, 5)}
+    simple |= {"cold": plc.cold_restart, "stop": plc.stop, "start": plc.start}
+    if kind in simple:
+        simple[kind]()
+    elif kind == "advance":
+        plc.advance(op[1])
+    elif kind == "break":
+        plc.power_break(op[1])
+    elif kind == "fault":
+        mod.set_fault(op[1], op[2])
+    elif kind == "hardware":
+        mod.hardware_fault(op[1], op[2])
+    elif kind == "write":
+        plc.write(op[1], op[2])
+    elif kind == "txt" and plc.text_block(op[1]).state in (TxtState.IDLE, TxtState.DONE):
+        plc.start_exchange(m=M, c=op[2], recv_bytes=27, txt=op[1])
+    elif kind == "reset":
+        plc.reset_text_block(op[1])
+
+
+def _check_status_word(mod: Double) -> None:
+    state, word = mod.state, mod.iw[0]
+    bit = lambda n: bool(word >> n & 1)  # noqa: E731
+    if state is ModuleState.OFF:
+        assert word == 0 and mod.leds() == Leds(False, False, False) and mod.module_fault
+        return
+    module_fault = mod._faults.any(FaultCategory.MODULE, memorised=False)
+    application = mod._faults.any(FaultCategory.APPLICATION, memorised=False)
+    assert bit(9) == (state is ModuleState.SELF_TEST)
+    assert bit(3) == (state is ModuleState.OPERATIONAL)
+    assert bit(8) == (state is ModuleState.BLOCKED)
+    assert bit(4) == (bit(6) or bit(7))
+    assert bit(6) or not module_fault
+    assert bit(7) or not application
+    assert bit(0xA) == mod.fault_active(TERMINAL_BLOCK)
+    assert not bit(0xC) or (state is ModuleState.OPERATIONAL and not module_fault)
+    assert not bit(0xC) or mod.ow[0] >> 0xC & 1
+    blocked = state is ModuleState.BLOCKED
+    assert mod.module_fault == (blocked or module_fault)
+    if state is ModuleState.OPERATIONAL:
+        assert mod.leds() == Leds(not module_fault, application, False)
+    else:
+        assert mod.leds() == (Leds(False, False, True) if blocked else Leds(True, True, False))
+
+
+@settings(max_examples=150)
+@given(st.lists(_OPS, max_size=25))
+def test_any_sequence_of_events_ends_in_a_legal_state(ops: list[tuple[Any, ...]]) -> None:
+    plc, mod = make()
+    for op in ops:
+        _apply(plc, mod, op)
+        plc.advance(0.01)
+        _check_status_word(mod)
+    # clean up: module back, faults gone and acknowledged, PLC in RUN: then the module
+    # is ready with no memorised fault, and no channel is left stuck with an exchange
+    for bit in _BITS[1:]:
+        mod.set_fault(bit, False)
+    mod.hardware_fault(0, False)
+    mod.hardware_fault(CONVERTER, False)
+    plc.reinsert(0, 5)
+    plc.start()
+    if mod.state is ModuleState.BLOCKED:
+        plc.power_break(0.5)
+    for txt in range(3):
+        plc.reset_text_block(txt)
+    plc.advance(2.1)
+    assert not plc.exchange(m=M, c=0x47, recv_bytes=8, txt=3).e
+    plc.advance(0.02)
+    _check_status_word(mod)
+    assert plc.read("IW5,0") & 0x03D8 == 0x0008  # ready: no fault, no self-test

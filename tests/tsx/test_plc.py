@@ -223,3 +223,62 @@ def test_bad_plc_arguments() -> None:
         plc.read("W4096")
     with pytest.raises(ConfigError, match="no module in rack 0 slot 2"):
         plc.read("IW2,0")
+
+
+def test_short_power_break_frees_the_channel_of_a_held_exchange() -> None:
+    # manual-notes F-9: any break ends the exchange with TXTi,S = 3; the module must
+    # forget it too, else every later exchange on the channel gets TXTi,S = 5
+    plc, mod = make()
+    tb = plc.start_exchange(m=m_of(3), c=0x02)
+    plc.advance(0.02)
+    plc.power_break(0.005)
+    assert tb.result is not None and tb.result.s == 3 and mod.power_ups == 1
+    assert mod.pending_exchange(0x63) is None
+    r = plc.exchange(m=m_of(3), c=0x0F, recv_bytes=27, txt=1)
+    assert not r.e and r.v == 0x3F
+
+
+def test_no_master_task_during_a_power_break() -> None:
+    plc, _ = make()
+    cycles = plc.cycles
+    plc.power_break(0.5)
+    assert plc.cycles == cycles
+    plc.advance(0.01)
+    assert plc.cycles == cycles + 1
+    with pytest.raises(ConfigError, match="power break of -1"):
+        plc.power_break(-1)
+
+
+def test_error_4_for_a_module_pulled_out_during_the_exchange() -> None:
+    # F-6: 4 = module fault ("module absent", AEM 4.4-1), 3 is the PLC's power break
+    plc, mod = make()
+    tb = plc.start_exchange(m=m_of(3), c=0x02)
+    plc.advance(0.02)
+    plc.remove(0, 3)
+    assert tb.result is not None and (tb.result.e, tb.result.s) == (True, 4)
+    plc.reinsert(0, 3)
+    assert plc.exchange(m=m_of(3), c=0x0F, recv_bytes=27).v == 0x3F
+
+
+def test_cold_restart_ends_a_held_exchange_and_frees_the_channel() -> None:
+    plc, mod = make()
+    tb = plc.start_exchange(m=m_of(3), c=0x02)
+    plc.advance(0.02)
+    plc.cold_restart()
+    assert tb.result is not None and tb.result.s == 3
+    assert plc.exchange(m=m_of(3), c=0x0F, recv_bytes=27).v == 0x3F
+
+
+@pytest.mark.parametrize(
+    ("kw", "message"),
+    [
+        ({"indirect": 5000}, "table W5000 out of range"),
+        ({"indirect": -1}, "table W-1 out of range"),
+        ({"recv_bytes": -1}, "reception capacity -1 not allowed"),
+        ({"txt": -1}, "TXT-1: a Text Block number cannot be negative"),
+    ],
+)
+def test_bad_text_block_arguments_are_config_errors(kw: dict[str, int], message: str) -> None:
+    plc, _ = make()
+    with pytest.raises(ConfigError, match=message):
+        plc.start_exchange(m=m_of(3), c=0x01, length=2, **kw)

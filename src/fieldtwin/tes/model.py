@@ -49,8 +49,10 @@ class Tes(RegisterFile, ModbusSlave):
         store: str | Path | ParameterStore | None = None,
         prm_jumper: bool = False,
         name: str | None = None,
+        link: Link = Link.RS485,
     ) -> None:
         self.model = model if isinstance(model, TesModel) else model_named(model)
+        self.link = link  # the port this TES is reached on: ``slave`` is its number there
         self.clock = clock if clock is not None else SimClock()
         self.name = name or f"{self.model.name} #{slave or 1}"
         self.prm_jumper = prm_jumper
@@ -78,8 +80,9 @@ class Tes(RegisterFile, ModbusSlave):
                 f" not a {self.model.name}"
             )
         values = self.eeprom() if stored_model is not None else factory(self.model)
-        if slave is not None:
-            values["rs485.slave"] = parse_value(self.model, "rs485.slave", slave)
+        if slave is not None:  # §3.1.3 / §3.1.4 each port has its own slave number
+            key = f"{state.link_key(self.link)}.slave"
+            values[key] = parse_value(self.model, key, slave)
         if stored_model is None or values != self.eeprom():
             self.store.save(self.name, self.model.name, values)
 
@@ -216,7 +219,8 @@ class Tes(RegisterFile, ModbusSlave):
 
     @property
     def slave(self) -> int:
-        return self.slave_for(Link.RS485)
+        """The slave number on the port this TES is reached on (``link``)."""
+        return self.slave_for(self.link)
 
     def slave_for(self, link: Link) -> int:
         value = self.params[f"{state.link_key(link)}.slave"]

@@ -2,12 +2,12 @@
 
     [[tes]]
     model = "TES 8EA"                      # fixed keys: model, slave, endpoint
-    slave = 3
+    slave = 3                              # on the port `link` names (absent: the EEPROM's)
     endpoint = "rtu+tcp://127.0.0.1:5021"  # several TES naming one RTU endpoint share a line
     name = "boiler"                        # the EEPROM's name in the store (optional)
     store = "eeprom.db"                    # SQLite parameter store (default: in memory)
     prm_jumper = false                     # true: factory settings, slave 1 (§3.1.2)
-    link = "rs485"                         # which TES port an RTU endpoint is (rs485, rs232)
+    link = "rs485"                         # which TES port the endpoint is (rs485, rs232)
     inputs = { 0 = true, a2 = 4.5, a3 = { kind = "square", low = 1.0, high = 9.0, period_s = 2 } }
     faults = { short = [3], open = [7], not_ready_ms = 2, powered = true }
 
@@ -49,9 +49,10 @@ def _build(table: Mapping[str, Any], clock: SimClock, at: str, base_dir: Path) -
     if unknown:
         raise ConfigError(f"{at}: unknown key(s) {', '.join(unknown)} (allowed: {', '.join(KEYS)})")
     model = _model(table, at)
-    slave = _slave(table.get("slave", 1), f"{at}.slave")
+    # the number on the port `link` names; absent: the EEPROM's (factory 1, §3.1.2)
+    slave = None if "slave" not in table else _slave(table["slave"], f"{at}.slave")
     endpoint_of(table, at)
-    link_of(table, at)
+    link = link_of(table, at)
     store = table.get("store")
     if store is not None and not isinstance(store, str):
         raise ConfigError(f"{at}.store: {store!r} is not a file path")
@@ -63,7 +64,7 @@ def _build(table: Mapping[str, Any], clock: SimClock, at: str, base_dir: Path) -
         raise ConfigError(f"{at}.name: {name!r} is not a string")
     path = None if store is None else base_dir / store
     try:
-        tes = Tes(model, slave, clock=clock, store=path, prm_jumper=prm, name=name)
+        tes = Tes(model, slave, clock=clock, store=path, prm_jumper=prm, name=name, link=link)
     except ConfigError as exc:
         raise ConfigError(f"{at}: {exc}") from None
     _inputs(tes, table.get("inputs", {}), f"{at}.inputs", base_dir)
@@ -169,8 +170,16 @@ def _int_list(value: object, at: str) -> list[int]:
 def _check_lines(built: list[Tes], tables: Sequence[Mapping[str, Any]], where: str) -> None:
     """Two TES answering the same number on one line would both reply."""
     seen: dict[tuple[str, int], int] = {}
+    ports: dict[str, int] = {}
     for i, (tes, table) in enumerate(zip(built, tables, strict=True)):
-        key = (str(endpoint_of(table, f"{where}: tes[{i}]")), tes.slave_for(link_of(table, "")))
+        url, link = str(endpoint_of(table, f"{where}: tes[{i}]")), link_of(table, "")
+        first = ports.setdefault(url, i)
+        if link is not link_of(tables[first], ""):  # one endpoint is one line: one port
+            raise ConfigError(
+                f"{where}: tes[{i}].link: {link.value} on {url}, where tes[{first}] is on"
+                f" {link_of(tables[first], '').value} (one endpoint is one line)"
+            )
+        key = (url, tes.slave_for(link))
         if key in seen:
             raise ConfigError(
                 f"{where}: tes[{i}].slave: {key[1]} already answers on {key[0]} (tes[{seen[key]}])"
@@ -193,8 +202,8 @@ def start_tes_endpoints(
     servers = []
     try:
         for url, members in groups.items():
-            first = tables[members[0]]
-            link = link_of(first, f"tes[{members[0]}]")
+            # build_tes checked that every TES on one endpoint names the same port
+            link = link_of(tables[members[0]], f"tes[{members[0]}]")
             servers.append(
                 serve_group(runner, parse_endpoint(url), [tes_list[i] for i in members], link)
             )

@@ -50,7 +50,9 @@ def serve_group(
 ) -> ModbusServer:
     if endpoint.scheme == "tcp":
         assert endpoint.host is not None and endpoint.port is not None
-        return serve_tcp(runner, listen(endpoint.host, endpoint.port), devices)
+        # a gateway in front of the RS-232 port uses that port's number, counters, delay
+        tcp_link = Link.RS232 if link is Link.RS232 else Link.TCP
+        return serve_tcp(runner, listen(endpoint.host, endpoint.port), devices, tcp_link)
     settings = line_settings(endpoint, devices, link)
     if endpoint.scheme == "rtu+tcp":
         assert endpoint.host is not None and endpoint.port is not None

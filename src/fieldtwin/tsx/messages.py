@@ -98,7 +98,7 @@ class MessageInterface:
     def reset_exchanges(self, now: int, channel: int | None = None) -> None:
         """Cancel exchanges in progress (OWxy,0,2, or a channel reset bit)."""
         for key, exchange in list(self._exchanges.items()):
-            if channel is None or key == channel:
+            if (channel is None or key == channel) and not exchange.done:
                 self.on_exchange_cancelled(exchange, now)
                 exchange.complete(Answer.fault(ERR_CANCELLED), now)
 

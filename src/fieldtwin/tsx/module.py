@@ -81,6 +81,7 @@ class IntelligentModule(MessageInterface):
         self._faults = FaultLatches()
         self._exchanges: dict[int, Exchange] = {}
         self._handles: list[ClockHandle] = []
+        self._self_test: ClockHandle | None = None
         self._hardware_faults: set[int] = set()  # found by the next initial self-test
 
     # --- identity ---------------------------------------------------------
@@ -154,7 +155,7 @@ class IntelligentModule(MessageInterface):
         self._faults.clear()
         self.awaiting_configuration = False
         self.on_power_on(now)
-        self.call_later(self.self_test_us, self._self_test_over)
+        self._self_test = self.call_later(self.self_test_us, self._self_test_over)
 
     def _self_test_over(self, now: int) -> None:
         if any(
@@ -176,6 +177,8 @@ class IntelligentModule(MessageInterface):
                 self._dispatch(exchange, now)
 
     def _block(self, now: int) -> None:
+        if self._self_test is not None:  # AEM 7.1-1: a blocked module never becomes ready
+            self._self_test.cancel()
         # SCM 6.4: a blocking fault "stops the user program from accessing the module
         # through the Text block": what the module held ends as a module fault.
         for exchange in list(self._exchanges.values()):
@@ -191,6 +194,10 @@ class IntelligentModule(MessageInterface):
         self._exchanges.clear()
         self.iw = [0] * 8
         self.i_bits = 0
+        # an unpowered module holds no outputs: the first refresh after power return
+        # delivers the PLC's output image again (bus_write only passes changes on)
+        self.ow = [0] * 8
+        self.o_bits = 0
         self.on_power_off(now)
 
     # --- hooks for subclasses ---------------------------------------------

@@ -20,9 +20,7 @@ from fieldtwin.errors import ConfigError
 from fieldtwin.tsx import registry
 from fieldtwin.tsx.addressing import ObjectKind, ObjectRef, parse_object
 from fieldtwin.tsx.module import BusImage, IntelligentModule, ModuleContext
-from fieldtwin.tsx.textblock import (
-    ERR_POWER_BREAK,
-)
+from fieldtwin.tsx.textblock import ERR_MODULE_FAULT, ERR_POWER_BREAK
 from fieldtwin.tsx.txt import (
     DATA_WORDS,
     ExchangeResult,
@@ -57,10 +55,8 @@ MODELS = {
     "TSX 87": PlcModel("TSX 87", 1, 254, "V", 8, 8),
 }
 
-POWER_RESERVE_US = 10 * MS
-_W_RE = re.compile(
-    r"^W(\d{1,5})$", re.IGNORECASE
-)  # a shorter break does not restart the modules (manual-notes)
+POWER_RESERVE_US = 10 * MS  # a shorter break does not restart the modules (F-9)
+_W_RE = re.compile(r"^W(\d{1,5})$", re.IGNORECASE)
 
 
 ABSENT = BusImage((1 << 8,) + (0,) * 7, 0, True)  # what an empty slot reads
@@ -97,6 +93,7 @@ class Plc:
         self.runner = runner
         self.speed = speed
         self.running = True
+        self._powered = True
         self.cycles = 0
         self.txt = TextBlocks(self.model.table_max, self.model.report_name, self._lookup)
         self.data = self.txt.data  # internal words W0..W4095
@@ -158,6 +155,8 @@ class Plc:
         entry = self._entry(rack, slot)
         entry.present = False
         entry.module.power_off()
+        # AEM 4.4-1 "module absent" is a module fault: TXTi,S = 4, not a power break
+        self.txt.end_all(ERR_MODULE_FAULT, self.clock.now, (rack, slot))
 
     def reinsert(self, rack: int, slot: int) -> None:
         """Put a pulled module back: it runs its initial self-test."""
@@ -213,12 +212,14 @@ class Plc:
     # --- the master task and the bus ------------------------------------------
 
     def _end_of_task(self, now: int) -> None:
+        self._scan = self.clock.call_later(self.scan_us, self._end_of_task)
+        if not self._powered:
+            return
         self.cycles += 1
         registers = self.cycles % self.model.register_every == 0
         for entry in self._slots.values():
             self._refresh(entry, registers, now)
         self.txt.end_of_task(now, self.running)
-        self._scan = self.clock.call_later(self.scan_us, self._end_of_task)
 
     def _refresh(self, entry: _Slot, registers: bool, now: int) -> None:
         module = entry.module
@@ -246,13 +247,15 @@ class Plc:
 
     def cold_restart(self) -> None:
         """SY0: modules re-initialised (AEM 2.5-3), images and Text Blocks cleared."""
+        present = [e for e in self._slots.values() if e.present]
+        for entry in present:  # off first: a module sees the exchange it was doing cut
+            entry.module.power_off()
         self._end_exchanges(ERR_POWER_BREAK)
         for entry in self._slots.values():
             entry.ow = [0] * 8
             entry.o_bits = 0
-            if entry.present:
-                entry.module.power_off()
-                entry.module.power_on()
+        for entry in present:
+            entry.module.power_on()
         self.running = True
 
     def hot_restart(self) -> None:
@@ -261,14 +264,20 @@ class Plc:
 
     def power_break(self, duration_s: float) -> None:
         """Cut the PLC supply for ``duration_s`` (simulated)."""
+        if not 0 <= duration_s < float("inf"):
+            raise ConfigError(f"power break of {duration_s} s not allowed (allowed 0 or more)")
         duration = seconds(duration_s)
-        self._end_exchanges(ERR_POWER_BREAK)
         long_break = duration > POWER_RESERVE_US
         present = [e for e in self._slots.values() if e.present]
-        if long_break:
+        if long_break:  # off first: a module sees the exchange it was doing cut
             for entry in present:
                 entry.module.power_off()
-        self._advance_us(duration)
+        self._end_exchanges(ERR_POWER_BREAK)
+        self._powered = False  # no master task, no bus refresh during the break
+        try:
+            self._advance_us(duration)
+        finally:
+            self._powered = True
         if long_break:
             for entry in present:
                 entry.module.power_on()

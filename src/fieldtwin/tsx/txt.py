@@ -136,12 +136,23 @@ class TextBlocks:
                 if tb.state is TxtState.STARTED:
                     self._validate(tb, now)
 
-    def end_all(self, code: int, now: int) -> None:
-        """A power break or a cold restart ends every exchange in progress."""
+    def end_all(self, code: int, now: int, where: tuple[int, int] | None = None) -> None:
+        """End every exchange in progress (power break, cold restart), or those
+        addressed to one (rack, slot) (the module pulled out): TXTi,E = 1, TXTi,S = code."""
         for tb in self._txts.values():
-            if tb.state in _BUSY:
-                tb.answer = Answer.fault(code)
-                self._finish(tb, now)
+            if tb.state in _BUSY and (where is None or _slot_of(tb.m) == where):
+                self._end(tb, Answer.fault(code), now)
+
+    def _end(self, tb: TextBlock, answer: Answer, now: int) -> None:
+        """End ``tb`` with ``answer``; the module forgets the exchange too, so that its
+        channel takes the next one (else TXTi,S = 5 "too many active" for ever)."""
+        tb.ticket = None
+        if tb.state is TxtState.IN_MODULE and tb.exchange is not None:
+            found = self._lookup(tb.m)
+            if found is not None and not tb.exchange.done:
+                found[0].cancel_exchange(tb.exchange, now)
+        tb.answer = answer
+        self._finish(tb, now)
 
     def start(
         self,
@@ -164,14 +175,12 @@ class TextBlocks:
         ``indirect`` names a word that holds the table's address.  The received
         words go to ``recv_table`` (W1000 -> 1000) when given, else to the table.
         """
+        _check_arguments(txt, recv_bytes, (table, recv_table, indirect))
         tb = self.block(txt)
         if tb.state in _BUSY:
             raise ConfigError(
                 f"TXT{txt} is busy ({tb.state.value}); reset it or wait for TXT{txt},D"
             )
-        for given in (table, recv_table):
-            if given is not None and not 0 <= given < DATA_WORDS:
-                raise ConfigError(f"table W{given} out of range (allowed W0..W{DATA_WORDS - 1})")
         tb.table, tb.indirect, tb.recv_table = table, indirect, recv_table
         if send is None and send_bytes is None and (table is not None or indirect is not None):
             send = self._table_words(table, indirect, length)
@@ -203,15 +212,8 @@ class TextBlocks:
     def reset(self, txt: int, now: int) -> None:
         """The Text Block's R input: the exchange in progress ends with TXTi,S = 1."""
         tb = self.block(txt)
-        if tb.state not in _BUSY:
-            return
-        tb.ticket = None
-        if tb.state is TxtState.IN_MODULE and tb.exchange is not None:
-            found = self._lookup(tb.m)
-            if found is not None:
-                found[0].cancel_exchange(tb.exchange, now)
-        tb.answer = Answer.fault(ERR_CANCELLED)
-        self._finish(tb, now)
+        if tb.state in _BUSY:
+            self._end(tb, Answer.fault(ERR_CANCELLED), now)
 
     def _validate(self, tb: TextBlock, now: int) -> None:
         table_max = self.table_max
@@ -261,3 +263,17 @@ class TextBlocks:
                 self.data[start:end] = words[: end - start]
         tb.result = result
         tb.state = TxtState.DONE
+
+
+def _slot_of(m: int) -> tuple[int, int]:
+    return (m >> 12) & 0xF, (m >> 8) & 0xF
+
+
+def _check_arguments(txt: int, recv_bytes: int, tables: tuple[int | None, ...]) -> None:
+    if txt < 0:
+        raise ConfigError(f"TXT{txt}: a Text Block number cannot be negative")
+    if recv_bytes < 0:
+        raise ConfigError(f"reception capacity {recv_bytes} not allowed (allowed 0 or more bytes)")
+    for given in tables:
+        if given is not None and not 0 <= given < DATA_WORDS:
+            raise ConfigError(f"table W{given} out of range (allowed W0..W{DATA_WORDS - 1})")

@@ -197,31 +197,48 @@ def _prepare_store(directory: Path) -> None:
     Tes("TES 8EA", ANALOG, store=directory / "eeprom.db", name="ana").write_eeprom(ANALOG_EEPROM)
 
 
-@pytest.fixture(scope="session")
-def running(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Running]:
-    directory = tmp_path_factory.mktemp("tes_blackbox")
-    _prepare_store(directory)
+def start_plant(
+    directory: Path, text: str, speed: float
+) -> tuple[subprocess.Popen[bytes], list[str]]:
+    """`fieldtwin run` on a plant file written in ``directory``; its lines up to ``running``."""
     plant = directory / "plant.toml"
-    plant.write_text(plant_text())
+    plant.write_text(text)
     proc = subprocess.Popen(
-        [sys.executable, "-m", "fieldtwin", "run", str(plant), "--no-live", "--speed", str(SPEED)],
+        [sys.executable, "-m", "fieldtwin", "run", str(plant), "--no-live", "--speed", str(speed)],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         cwd=ROOT,
     )
     try:
-        lines = _read_lines(proc, "running ", time.monotonic() + START_S)
-        yield Running(proc, *_endpoints(lines), lines)
-    finally:
-        proc.terminate()
-        try:
-            out, err = proc.communicate(timeout=STOP_S)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.communicate(timeout=STOP_S)
-            raise AssertionError("fieldtwin run did not stop after SIGTERM") from None
+        return proc, _read_lines(proc, "running ", time.monotonic() + START_S)
+    except BaseException:
+        proc.kill()
+        proc.communicate(timeout=STOP_S)
+        raise
+
+
+def stop_plant(proc: subprocess.Popen[bytes]) -> None:
+    """SIGTERM, a bounded wait, and the process must exit 0 with its last line."""
+    proc.terminate()
+    try:
+        out, err = proc.communicate(timeout=STOP_S)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.communicate(timeout=STOP_S)
+        raise AssertionError("fieldtwin run did not stop after SIGTERM") from None
     assert proc.returncode == 0, err.decode()
     assert out.decode().splitlines()[-1].startswith("stopped at t = ")
+
+
+@pytest.fixture(scope="session")
+def running(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Running]:
+    directory = tmp_path_factory.mktemp("tes_blackbox")
+    _prepare_store(directory)
+    proc, lines = start_plant(directory, plant_text(), SPEED)
+    try:
+        yield Running(proc, *_endpoints(lines), lines)
+    finally:
+        stop_plant(proc)
 
 
 @pytest.fixture(scope="session")
