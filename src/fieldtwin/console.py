@@ -206,6 +206,8 @@ class Console:
         return self.plc.module(rack, slot)
 
     def _status(self, args: list[str]) -> list[str]:
+        if self.plant.plc is None and not args:
+            return [self._time(), *self._tes_status()]
         plc = self.plc
         modules = [self._module(args[0])] if args else plc.modules
         lines = [f"PLC {plc.model.name} {'RUN' if plc.running else 'STOP'}  {self._time()}"]
@@ -292,7 +294,13 @@ class Console:
         if mode not in actions:
             raise ConfigError(f"plc: {mode!r} not allowed (allowed: run, stop, cold, hot)")
         actions[mode]()
-        return [f"PLC {'RUN' if self.plc.running else 'STOP'}"]
+        done = {"cold": " (cold restart)", "hot": " (hot restart)"}.get(mode, "")
+        return [f"PLC {'RUN' if self.plc.running else 'STOP'}{done}"]
+
+    def _tes_status(self) -> list[str]:
+        from fieldtwin.live import tes_status
+
+        return [f"TES {t.slave} {t.model.name}: {tes_status(t)}" for t in self.plant.tes]
 
     # --- TES -------------------------------------------------------------------------
 

@@ -220,3 +220,6 @@ def test_tes_digital_input_takes_0_and_1(tmp_path: Path) -> None:
     console = Console(load_plant(path))
     assert console.execute("tes 1 input 3 1") == ["tes 1 input 3 = 1"]
     assert console.execute("tes 1 input 3 false") == ["tes 1 input 3 = false"]
+    status = console.execute("status")
+    assert status[0] == "t = 0.000 s"
+    assert status[1].startswith("TES 1 TES 32EST: on  status H'")
