@@ -11,7 +11,7 @@ Learned from python-can's bus/interface split and httpcore's thin adapters.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Protocol, runtime_checkable
+from typing import NoReturn, Protocol, runtime_checkable
 
 from fieldtwin.errors import ConfigError, TransportError
 
@@ -94,7 +94,8 @@ class Flushable(Protocol):
 
 
 class FdTransport:
-    """Shared body of the fd-backed transports (pty, serial): an output queue over os.write."""
+    """Shared body of the fd-backed transports (pty, serial, TCP): an output queue over
+    ``_write`` (os.write, or socket.send), flushed as far as the kernel takes it."""
 
     is_real = True
     peer_path: str | None = None
@@ -136,7 +137,7 @@ class FdTransport:
                 return
             del out[:written]
 
-    def _broken(self, why: str) -> None:
+    def _broken(self, why: str) -> NoReturn:
         self.close()
         raise TransportError(f"{self.name}: {why}")
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import socket
 
 from fieldtwin.errors import TransportError
-from fieldtwin.transports.base import READ_CHUNK
+from fieldtwin.transports.base import READ_CHUNK, FdTransport
 
 CONNECT_TIMEOUT_S = 5.0
 
@@ -24,52 +24,18 @@ def _hostport(address: tuple[str, int] | tuple[str, int, int, int]) -> str:
     return f"[{host}]:{port}" if ":" in host else f"{host}:{port}"
 
 
-class TcpTransport:
+class TcpTransport(FdTransport):
     """One TCP connection."""
 
-    is_real = True
-    peer_path: str | None = None
-
     def __init__(self, sock: socket.socket, name: str) -> None:
+        super().__init__(name)
         sock.setblocking(False)
         sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        self.name = name
-        self.closed = False
         self._sock = sock
         self._fd = sock.fileno()
-        self._out = bytearray()
 
-    def __repr__(self) -> str:
-        return f"<TcpTransport {self.name} {'closed' if self.closed else 'open'}>"
-
-    @property
-    def pending_output(self) -> int:
-        return len(self._out)
-
-    def _check_open(self, what: str) -> None:
-        if self.closed:
-            raise TransportError(f"cannot {what} on {self.name}: it is closed")
-
-    def _broken(self, why: str) -> TransportError:
-        self.close()
-        return TransportError(f"{self.name}: {why}")
-
-    def send(self, data: bytes) -> None:
-        """Queue ``data`` and send what the kernel takes now."""
-        self._check_open("send")
-        self._out += data
-        self.flush()
-
-    def flush(self) -> None:
-        out = self._out
-        while out and not self.closed:
-            try:
-                sent = self._sock.send(out[:READ_CHUNK])
-            except BlockingIOError:
-                return
-            except OSError as exc:
-                raise self._broken(f"send failed: {exc}") from exc
-            del out[:sent]
+    def _write(self, data: bytes) -> int:
+        return self._sock.send(data)
 
     def receive(self) -> bytes:
         """Bytes that arrived; b"" if none; TransportError once the peer has closed."""
@@ -80,9 +46,9 @@ class TcpTransport:
         except BlockingIOError:
             return b""
         except OSError as exc:
-            raise self._broken(f"receive failed: {exc}") from exc
+            self._broken(f"receive failed: {exc}")
         if not data:
-            raise self._broken("the peer has closed the connection")
+            self._broken("the peer has closed the connection")
         return data
 
     def fileno(self) -> int | None:
