@@ -10,6 +10,7 @@ from rich.text import Text
 
 from fieldtwin.clock import S
 from fieldtwin.plant import Plant
+from fieldtwin.tsx.bus import ModuleState
 from fieldtwin.words import format_hex
 
 
@@ -58,7 +59,7 @@ def mode(module: Any) -> str:
     """Run / Stop for a module that has them, else its state (self-test, off...)."""
     if module.running:
         return "Run"
-    if module.has_run_stop and module.state.value == "operational":
+    if module.has_run_stop and module.state is ModuleState.OPERATIONAL:
         return "Stop"
     return str(module.state.value)
 
