@@ -3,7 +3,7 @@ PY ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
-SPEED ?= 1
+SPEED ?=
 PLANT ?=
 
 .PHONY: run test lint setup clean bench
@@ -17,7 +17,7 @@ $(STAMP): pyproject.toml
 setup: $(STAMP)
 
 run: $(STAMP)
-	$(BIN)/fieldtwin run $(PLANT) --speed $(SPEED)
+	$(BIN)/fieldtwin run $(PLANT) $(if $(SPEED),--speed $(SPEED))
 
 test: $(STAMP)
 	$(BIN)/python -m pytest

@@ -270,3 +270,9 @@ def test_any_table_builds_or_says_why(kind: str, fields: dict[str, object]) -> N
     else:
         value = signal.value_at(1_000_000)
         assert isinstance(value, bool) or math.isfinite(value)
+
+
+def test_csv_from_an_endless_device_is_refused_with_a_bound() -> None:
+    # issue 10 item 6: /dev/zero was read without a bound
+    with pytest.raises(ConfigError, match=r"/dev/zero: larger than 16 MiB"):
+        build({"kind": "csv", "file": "/dev/zero"}, base_dir=Path("/"))

@@ -15,16 +15,12 @@ from fieldtwin.clock import seconds
 from fieldtwin.errors import ConfigError
 
 _ROW_FORM = "allowed: 'time_s,value' with two numbers, times not decreasing"
+MAX_FILE_BYTES = 16 * 1024 * 1024  # a signal file is read whole: bounded (DESIGN rule 14)
 
 
 def read_points(path: Path) -> list[tuple[int, float]]:
     """Rows of ``path`` as (t_us, value); ConfigError naming file and line on a bad row."""
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot read the signal file ({exc.strerror})") from None
-    except UnicodeDecodeError:
-        raise ConfigError(f"{path}: not a UTF-8 text file ({_ROW_FORM})") from None
+    text = _read_bounded(path)
     points: list[tuple[int, float]] = []
     for line_no, row in enumerate(csv.reader(text.splitlines()), start=1):
         cells = [cell.strip() for cell in row]
@@ -41,6 +37,24 @@ def read_points(path: Path) -> list[tuple[int, float]]:
     if not points:
         raise ConfigError(f"{path}: no data rows ({_ROW_FORM})")
     return points
+
+
+def _read_bounded(path: Path) -> str:
+    """The file's text, at most MAX_FILE_BYTES (``/dev/zero`` or a device never ends)."""
+    try:
+        with path.open("rb") as file:
+            data = file.read(MAX_FILE_BYTES + 1)
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot read the signal file ({exc.strerror})") from None
+    if len(data) > MAX_FILE_BYTES:
+        raise ConfigError(
+            f"{path}: larger than {MAX_FILE_BYTES // (1024 * 1024)} MiB"
+            " (allowed: a CSV file of at most that size)"
+        )
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise ConfigError(f"{path}: not a UTF-8 text file ({_ROW_FORM})") from None
 
 
 def _parse_row(
