@@ -22,7 +22,7 @@ from fieldtwin.tsx.textblock import MODULE_SYSTEM, V_ERROR, V_OK_WRITE, Answer, 
 from fieldtwin.words import bytes_to_words, words_to_bytes
 
 if TYPE_CHECKING:
-    from fieldtwin.tsx.dem24.module import Dem24Core as Dem24
+    from fieldtwin.tsx.dem24.module import Dem24
 
 REQ_READ = 0x01
 REQ_TIME = 0x02
