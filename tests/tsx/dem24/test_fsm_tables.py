@@ -42,8 +42,9 @@ def _timebase(state: enum.Enum, data: st.DataObject) -> tuple[Machine[Any, Any, 
         minute = data.draw(st.integers(0, 59))
         indicator = data.draw(st.integers(0, 255))
         tb.pending = TimeReference(CivilTime(1994, 7, 15, 18, minute, 33), indicator)
-    tb.machine.state = state
-    return tb.machine, data.draw(st.integers(0, 10**9))
+    machine: Machine[Any, Any, Any] = tb.machine
+    machine.state = state
+    return machine, data.draw(st.integers(0, 10**9))
 
 
 def _detector(state: enum.Enum, data: st.DataObject) -> tuple[Machine[Any, Any, Any], int]:
@@ -54,8 +55,9 @@ def _detector(state: enum.Enum, data: st.DataObject) -> tuple[Machine[Any, Any, 
         data.draw(st.integers(1, 500)),
     )
     detector = Detector(th)
-    detector.machine.state = state
-    return detector.machine, data.draw(st.integers(0, 10**9))
+    machine: Machine[Any, Any, Any] = detector.machine
+    machine.state = state
+    return machine, data.draw(st.integers(0, 10**9))
 
 
 def _sync_input(state: enum.Enum, data: st.DataObject) -> tuple[Machine[Any, Any, Any], int]:
@@ -64,9 +66,10 @@ def _sync_input(state: enum.Enum, data: st.DataObject) -> tuple[Machine[Any, Any
     if state is not SyncLevel.REST:
         sync.leading_edge = plc.clock.now - data.draw(st.integers(0, 500))
         sync.active = True
-    sync.machine.state = state
+    machine: Machine[Any, Any, Any] = sync.machine
+    machine.state = state
     plc.advance(data.draw(st.integers(0, 3)) * MS / S)
-    return sync.machine, plc.clock.now
+    return machine, plc.clock.now
 
 
 @dataclass(frozen=True)
