@@ -6,6 +6,7 @@ import pytest
 
 from fieldtwin.clock import MS, S
 from fieldtwin.errors import ConfigError
+from fieldtwin.signals import PulseTrain
 from fieldtwin.tsx.dem24.syncinput import SYNC_FILTER_US, SYNC_PULSE_US, SyncLevel
 from tests.tsx.dem24.helpers import SLOT, at, make, read_all, stamp, synced
 
@@ -113,3 +114,26 @@ def test_a_pulse_width_must_be_a_positive_number_of_microseconds(width: object) 
         mod.attach_pulse_source(S, width_us=width)  # type: ignore[arg-type]
     with pytest.raises(ConfigError, match="sync input"):
         mod.set_sync_input("high")  # type: ignore[arg-type]
+
+
+def test_1_2_1_a_pulse_train_on_in_syn_counts_only_pulses_past_the_filter() -> None:
+    plc, mod = make()
+    start = plc.clock.now + S
+    mod.set_sync_signal(PulseTrain(period_us=S, duty=0.0004, start_us=start))  # 400 us
+    plc.advance(3.01)
+    assert mod.timebase.pulses == 0 and mod.sync_input.ignored == 3
+    mod.set_sync_signal(PulseTrain(period_us=S, duty=0.001, start_us=plc.clock.now))  # 1 ms
+    plc.advance(2.5)
+    assert mod.timebase.pulses == 3 and mod.sync_input.taken == 3
+    mod.set_sync_signal(None)
+    plc.advance(2.0)
+    assert mod.timebase.pulses == 3
+
+
+def test_taking_the_signal_off_in_syn_leaves_the_input_at_rest() -> None:
+    plc, mod = make()
+    mod.set_sync_signal(PulseTrain(period_us=S, duty=0.5, start_us=plc.clock.now))
+    plc.advance(0.1)
+    assert mod.sync_input.active and mod.timebase.pulses == 1
+    mod.set_sync_signal(None)
+    assert not mod.sync_input.active and mod.sync_input.state is SyncLevel.REST

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any, ClassVar
 
 from fieldtwin.errors import ConfigError
+from fieldtwin.signals import DiscreteSignal
 from fieldtwin.tsx.dem24 import requests
 from fieldtwin.tsx.dem24.config import (
     DEFAULT_CONFIG,
@@ -146,6 +147,10 @@ class Dem24(IntelligentModule):
     def set_sync_input(self, value: bool | float) -> None:
         """The IN-SYN level now: a bool, or volts of either sign (DEM 7.2)."""
         self.sync_input.set_level(value, self.clock.now)
+
+    def set_sync_signal(self, signal: DiscreteSignal | None) -> None:
+        """Drive IN-SYN from a discrete signal (e.g. a ``PulseTrain``); None: stop."""
+        self.sync_input.attach(signal)
 
     def connect_sync_output(self, other: Dem24) -> None:
         """Wire OUT-SYN to another module's IN-SYN (at most 32, DEM 7.2)."""

@@ -69,7 +69,7 @@ def write_time(mod: Dem24, data: bytes, now: int, capacity: int) -> Answer:
         mod.set_fault(FB_TIME_REFUSED, True)
         return Answer(v=V_ERROR)
     mod.set_fault(FB_TIME_REFUSED, False)
-    mod.timebase.reference(ref, now)
+    mod.logbook.reference(ref, now)  # taken at the next pulse (4.1-3)
     mod.refresh_status()
     return Answer(v=V_OK_WRITE)
 

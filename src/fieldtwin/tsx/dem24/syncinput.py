@@ -23,6 +23,7 @@ from collections.abc import Callable
 from fieldtwin.clock import MS, Handle, SimClock
 from fieldtwin.errors import ConfigError
 from fieldtwin.fsm import Machine, Table
+from fieldtwin.signals import DiscreteSignal
 from fieldtwin.tsx.dem24.inputs import Thresholds
 
 SYNC_FILTER_US = 500  # DEM 1.2-1 "The synchronization input is filtered at 500 microseconds"
@@ -67,6 +68,8 @@ class SyncInput:
         self.taken = 0  # pulses that passed the filter
         self.ignored = 0  # pulses shorter than the filter
         self._filter: Handle | None = None
+        self._signal: DiscreteSignal | None = None
+        self._signal_handle: Handle | None = None
 
     @property
     def state(self) -> SyncLevel:
@@ -85,6 +88,25 @@ class SyncInput:
         self.active = active
         self.machine.fire(SyncEdge.LEADING if active else SyncEdge.TRAILING, t)
         self._repeat(active, t)
+
+    def attach(self, signal: DiscreteSignal | None) -> None:
+        """Drive the input from a discrete signal (its edges, as they come); None takes
+        the signal off and leaves the input at rest."""
+        if self._signal_handle is not None:
+            self._signal_handle.cancel()
+            self._signal_handle = None
+        self._signal = signal
+        if signal is not None:
+            self._follow(self.clock.now)
+        elif self.active:
+            self.set_level(False, self.clock.now)
+
+    def _follow(self, t: int) -> None:
+        signal = self._signal
+        assert signal is not None
+        self.set_level(bool(signal.value_at(t)), t)
+        nxt = signal.next_change(t)
+        self._signal_handle = None if nxt is None else self.clock.schedule(nxt, self._follow)
 
     def pulse(self, t: int, width_us: int = SYNC_PULSE_US) -> None:
         """A pulse of ``width_us`` from ``t`` on (pulses closer than their width merge)."""
