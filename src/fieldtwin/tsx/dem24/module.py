@@ -39,11 +39,17 @@ from fieldtwin.tsx.dem24.inputs import (
 from fieldtwin.tsx.dem24.logbook import Logbook
 from fieldtwin.tsx.dem24.oscillation import Detector, Monitor
 from fieldtwin.tsx.dem24.oscillation import Thresholds as OscThresholds
+from fieldtwin.tsx.dem24.registers import (
+    OW1_OVERALL,
+    OW1_PURGE,
+    OW1_STOP,
+    input_bits,
+    status_word,
+)
 from fieldtwin.tsx.dem24.stack import (
     CH_SUPPLY,
     CH_SYNC,
     CH_TERMINAL,
-    NEARLY_FULL,
     Body,
     Message,
     MessageStack,
@@ -57,12 +63,6 @@ from fieldtwin.tsx.dem24.timebase import SyncOutcome, Timebase
 from fieldtwin.tsx.module import FaultCategory, IntelligentModule, ModuleContext, ModuleState
 from fieldtwin.tsx.textblock import Exchange
 from fieldtwin.words import get_bit
-
-# Discrete input bits Ixy,i (DEM 2.4-2 reconstructed, AMB-DEM-01)
-I_READY, I_NOT_EMPTY, I_NEARLY_FULL, I_SATURATED, I_SYNC_FAULT, I_PULSE = 0, 1, 2, 3, 4, 7
-
-# OWxy,1 command bits (DEM 2.4-3, 4.2-1, AMB-DEM-03)
-OW1_STOP, OW1_PURGE, OW1_OVERALL = 0, 1, 2
 
 FAULTS = {
     "terminal_block": "TSX BLK4 terminal block removed",
@@ -437,21 +437,10 @@ class Dem24(IntelligentModule):
             return
         logbook = self.logbook
         timebase, stack = logbook.timebase, logbook.stack
-        ready = timebase.ready
-        count = len(stack)
-        iw2 = self.diag_word
-        iw2 |= int(not self.logging) << 0  # DEM 2.4-3 IWxy,2,0: 1 = no logging
-        iw2 |= int(ready) << 7
-        iw2 |= int(self.fault_active(FB_SUPPLY)) << 8
-        iw2 |= int(self.default_config) << 0xD
+        ready, count = timebase.ready, len(stack)
+        supply = self.fault_active(FB_SUPPLY)
         image = self.image()
-        self.iw[2], self.iw[5] = iw2, count
-        self.iw[6], self.iw[7] = image & 0xFFFF, image >> 16
-        self.i_bits = (
-            (int(ready) << I_READY)
-            | (int(count > 0) << I_NOT_EMPTY)
-            | (int(count >= NEARLY_FULL) << I_NEARLY_FULL)
-            | (int(stack.full) << I_SATURATED)
-            | (int(timebase.fault) << I_SYNC_FAULT)
-            | (int(self.pulse_image) << I_PULSE)
-        )
+        iw = self.iw
+        iw[2] = status_word(self.diag_word, self.logging, ready, supply, self.default_config)
+        iw[5], iw[6], iw[7] = count, image & 0xFFFF, image >> 16
+        self.i_bits = input_bits(ready, count, stack.full, timebase.fault, self.pulse_image)
