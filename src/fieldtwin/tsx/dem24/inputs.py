@@ -86,6 +86,7 @@ class InputBank:
         self.active = False  # module operational and inputs readable
         self.filter_us = HARDWARE_FILTER_US
         self.supply_ok = True  # without field supply every input reads 0
+        self._levels = 0  # the accepted levels, bit i = channel i (IWxy,6/7)
 
     def set_filter_ms(self, filt_ms: int) -> None:
         self.filter_us = max(HARDWARE_FILTER_US, filt_ms * MS)
@@ -97,7 +98,7 @@ class InputBank:
         return self._ch[channel].level
 
     def levels(self) -> int:
-        return sum(int(c.level) << i for i, c in enumerate(self._ch))
+        return self._levels
 
     # --- the terminals ------------------------------------------------------------
 
@@ -161,7 +162,8 @@ class InputBank:
     def _confirm(self, channel: int, now: int) -> None:
         ch = self._ch[channel]
         ch.pending = None
-        ch.level = self._effective(ch)
+        ch.level = level = self._effective(ch)
+        self._levels = self._levels | (1 << channel) if level else self._levels & ~(1 << channel)
         self._accept(channel, ch.level, ch.edge_t, ch.stamp, now)
 
     def supply(self, ok: bool, t: int) -> None:
@@ -178,6 +180,7 @@ class InputBank:
             value = self._effective(ch)
             if value != ch.level:
                 ch.level = value
+                self._levels ^= 1 << channel
                 if not silent:
                     self._accept(channel, value, now, self._stamp(now), now)
 
@@ -192,3 +195,4 @@ class InputBank:
     def reset_levels(self) -> None:
         for ch in self._ch:
             ch.level = False
+        self._levels = 0

@@ -3,20 +3,26 @@
 Sans-IO and event-driven: the module acts at input edges (from the signals' next
 change), at the ends of the input filters, at synchronization pulses, at the
 pulse-loss deadline, at oscillation checks and at periodic logging; nothing runs per
-PLC scan.  The Text Block requests live in :mod:`fieldtwin.tsx.dem24.requests`, the
-console and plant-file side and the two models in :mod:`fieldtwin.tsx.dem24.models`.
+PLC scan.  The module is composed of its parts, each declared here and owning its own
+state: the input bank (:mod:`.inputs`), the logbook (stack + time base,
+:mod:`.logbook`), the synchronization input (:mod:`.syncinput`) and, when the
+configuration asks for it, the oscillation monitor (:mod:`.oscillation`).  The Text
+Block requests live in :mod:`.requests`, the two models in :mod:`.models`.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from pathlib import Path
 from typing import Any, ClassVar
 
-from fieldtwin.clock import Handle
 from fieldtwin.errors import ConfigError
+from fieldtwin.signals import DiscreteSignal
 from fieldtwin.tsx.dem24 import requests
 from fieldtwin.tsx.dem24.config import (
     DEFAULT_CONFIG,
     FB_CONFIG_REFUSED,
+    FB_STACK_FULL,
     FB_SUPPLY,
     FB_SYNC,
     FB_TERMINAL,
@@ -30,25 +36,43 @@ from fieldtwin.tsx.dem24.inputs import (
     Thresholds,
     check_channel,
 )
-from fieldtwin.tsx.dem24.logbook import OW1_OVERALL, OW1_PURGE, Logbook
-from fieldtwin.tsx.dem24.oscillation import Detector
+from fieldtwin.tsx.dem24.logbook import Logbook
+from fieldtwin.tsx.dem24.oscillation import Detector, Monitor
 from fieldtwin.tsx.dem24.oscillation import Thresholds as OscThresholds
+from fieldtwin.tsx.dem24.registers import (
+    OW1_OVERALL,
+    OW1_PURGE,
+    OW1_STOP,
+    input_bits,
+    status_word,
+)
 from fieldtwin.tsx.dem24.stack import (
     CH_SUPPLY,
     CH_SYNC,
     CH_TERMINAL,
-    STATE_OSCILLATING,
+    Body,
+    Message,
     MessageStack,
+    MessageType,
+    change_body,
+    overall_body,
 )
 from fieldtwin.tsx.dem24.sync import SYNC_OUTPUT_MAX, PulseSource, announce
+from fieldtwin.tsx.dem24.syncinput import SYNC_PULSE_US, SyncInput, check_width
 from fieldtwin.tsx.dem24.timebase import SyncOutcome, Timebase
-from fieldtwin.tsx.module import FaultCategory, ModuleContext, ModuleState
+from fieldtwin.tsx.module import FaultCategory, IntelligentModule, ModuleContext, ModuleState
 from fieldtwin.tsx.textblock import Exchange
 from fieldtwin.words import get_bit
 
+FAULTS = {
+    "terminal_block": "TSX BLK4 terminal block removed",
+    "supply": "external input supply lost",
+    "pulses": "synchronization pulses no longer reach IN-SYN",
+}
 
-class Dem24Core(Logbook):
-    """The time-stamping function; :class:`Dem24` adds the console and plant-file side."""
+
+class Dem24(IntelligentModule):
+    """What the DEM 2412 and 2413 share; the models set thresholds and codes."""
 
     type_name: ClassVar[str] = "TSX DEM 24"
     thresholds: ClassVar[Thresholds] = TYPE1_24V
@@ -69,23 +93,35 @@ class Dem24Core(Logbook):
         self.config: Dem24Config = DEFAULT_CONFIG
         self.default_config = True
         self.diag_word = 0
-        self.timebase = Timebase(drift_ppm=self.clock_drift_ppm)
-        self.stack = MessageStack()
-        self.inputs = InputBank(self.clock, self.thresholds, self._stamp, self._accepted)
-        self.detectors: list[Detector] | None = None
-        self._osc_handles: list[Handle | None] = [None] * CHANNELS
-        self._loss: Handle | None = None
-        self._periodic: Handle | None = None
-        self._periodic_due_ms: int | None = None
+        self.logbook = Logbook(
+            rack, slot, self.clock_drift_ppm, self.call_at, self.log_overall, self._pulse_lost
+        )
+        self.inputs = InputBank(self.clock, self.thresholds, self.logbook.stamp, self._accepted)
+        self.sync_input = SyncInput(self.clock, self.thresholds, self._take_pulse, self._repeat)
+        self.oscillation: Monitor | None = None  # with OSC in the configuration (3.2-1)
         self.pulse_image = False
         self.terminal_block = True  # fitted
         self.supply = True  # external supply present
-        self.sync_outputs: list[Dem24Core] = []
+        self.sync_outputs: list[Dem24] = []
         self.pulse_source: PulseSource | None = None
         self.plant_startup: list[Any] = []  # requests the plant file applies after self-test
         self.edges_stamped = 0
         for follower in announce(self.clock, self, rack, slot):
             self.connect_sync_output(follower)  # type: ignore[arg-type]
+
+    # --- the parts, for inspection ----------------------------------------------------
+
+    @property
+    def timebase(self) -> Timebase:
+        return self.logbook.timebase
+
+    @property
+    def stack(self) -> MessageStack:
+        return self.logbook.stack
+
+    @property
+    def detectors(self) -> list[Detector] | None:
+        return None if self.oscillation is None else self.oscillation.detectors
 
     # --- public API: inputs and pulses ------------------------------------------------
 
@@ -100,11 +136,23 @@ class Dem24Core(Logbook):
         """Drive an input from a signal (bools, or volts switched where they cross a limit)."""
         self.inputs.attach(check_channel(channel), signal)
 
-    def sync_pulse(self) -> None:
-        """One synchronization pulse on IN-SYN now."""
-        self.receive_pulse(self.clock.now)
+    def sync_pulse(self, width_us: int = SYNC_PULSE_US) -> None:
+        """One synchronization pulse on IN-SYN now, ``width_us`` long (DEM 7.2)."""
+        self.receive_pulse(self.clock.now, width_us)
 
-    def connect_sync_output(self, other: Dem24Core) -> None:
+    def receive_pulse(self, now: int, width_us: int = SYNC_PULSE_US) -> None:
+        """A pulse on IN-SYN from ``now``: counted when it lasts the 500 us filter (1.2-1)."""
+        self.sync_input.pulse(now, width_us)
+
+    def set_sync_input(self, value: bool | float) -> None:
+        """The IN-SYN level now: a bool, or volts of either sign (DEM 7.2)."""
+        self.sync_input.set_level(value, self.clock.now)
+
+    def set_sync_signal(self, signal: DiscreteSignal | None) -> None:
+        """Drive IN-SYN from a discrete signal (e.g. a ``PulseTrain``); None: stop."""
+        self.sync_input.attach(signal)
+
+    def connect_sync_output(self, other: Dem24) -> None:
         """Wire OUT-SYN to another module's IN-SYN (at most 32, DEM 7.2)."""
         if len(self.sync_outputs) >= SYNC_OUTPUT_MAX:
             raise ConfigError(
@@ -115,18 +163,23 @@ class Dem24Core(Logbook):
             raise ConfigError(f"slot {other.address} cannot be wired twice or to itself")
         self.sync_outputs.append(other)
 
-    def attach_pulse_source(self, period_us: int, start_us: int = 0) -> PulseSource:
+    def attach_pulse_source(
+        self, period_us: int, start_us: int = 0, width_us: int = SYNC_PULSE_US
+    ) -> PulseSource:
         """An external pulse generator on IN-SYN (replaces any previous one)."""
+        check_width(width_us)
         if self.pulse_source is not None:
             self.pulse_source.stop()
-        self.pulse_source = PulseSource(self.clock, period_us, start_us, self.receive_pulse)
+        pulse = self.sync_input.pulse
+        self.pulse_source = PulseSource(
+            self.clock, period_us, start_us, lambda now: pulse(now, width_us)
+        )
         return self.pulse_source
 
     def set_clock_drift(self, ppm: float) -> None:
         """Make the module clock fast (> 0) or slow by ``ppm`` (DEM 7.2: within 25 ppm)."""
         self.clock_drift_ppm = float(ppm)
-        self.timebase.clock.set_drift(self.clock_drift_ppm, self.clock.now)
-        self._arm_periodic(self.clock.now)
+        self.logbook.set_drift(self.clock_drift_ppm, self.clock.now)
 
     def set_terminal_block(self, fitted: bool) -> None:
         """Fit or remove the TSX BLK4 terminal block (DEM 4.3, 7.2 monitoring)."""
@@ -147,11 +200,8 @@ class Dem24Core(Logbook):
     def on_power_on(self, now: int) -> None:
         # DEM 2.5-3: no protected memory, configuration and time are lost
         self.config, self.default_config, self.diag_word = DEFAULT_CONFIG, True, 0
-        self.timebase = Timebase(drift_ppm=self.clock_drift_ppm)
-        self.stack = MessageStack()
-        self.detectors = None
-        self._osc_handles = [None] * CHANNELS
-        self._periodic_due_ms = None
+        self.logbook.reset(self.clock_drift_ppm)
+        self._stop_oscillation()
         self.pulse_image = False
         self.inputs.stop()
         self.inputs.reset_levels()
@@ -194,22 +244,19 @@ class Dem24Core(Logbook):
         self.diag_word = 0
         self.awaiting_configuration = False
         self.set_fault(FB_CONFIG_REFUSED, False)
-        self.timebase.t_syn_ms, self.timebase.drift_ms = config.t_syn_s * 1000, config.drift_ms
+        per_min = config.per_min if config.periodic else 0
+        self.logbook.configure(config.t_syn_s, config.drift_ms, per_min)
         self.inputs.set_filter_ms(config.filt_ms)
-        for handle in self._osc_handles:
-            if handle is not None:
-                handle.cancel()
-        self._osc_handles = [None] * CHANNELS
-        self.detectors = None
+        self._stop_oscillation()
         if config.oscillation:
             th = OscThresholds.from_config(
                 config.t_max_s, config.n_max, config.t_min_s, config.n_min
             )
-            self.detectors = [Detector(th) for _ in range(CHANNELS)]
+            self.oscillation = Monitor(th, CHANNELS, self.call_at, self._normal_again)
         monitored = config.supply_monitoring and not self.supply
         if monitored != self.fault_active(FB_SUPPLY):
             self._fault_input(FB_SUPPLY, CH_SUPPLY, monitored)
-        self._start_periodic(now)
+        self.logbook.start_periodic(now)
         self.refresh_status()
         self._refresh_words()
 
@@ -220,40 +267,74 @@ class Dem24Core(Logbook):
         self.set_fault(FB_CONFIG_REFUSED, True)
         self._refresh_words()
 
+    # --- the console and plant-file side ------------------------------------------------
+
+    def console_input(self, channel: int, text: str) -> None:
+        from fieldtwin.tsx.dem24.plantkeys import console_value
+
+        self.set_input(channel, console_value(text))
+
+    def fault_names(self) -> Mapping[str, str]:
+        return FAULTS
+
+    def inject_fault(self, name: str, active: bool) -> None:
+        if name == "terminal_block":
+            self.set_terminal_block(not active)
+        elif name == "supply":
+            self.set_supply(not active)
+        elif name == "pulses" and self.pulse_source is not None:
+            self.pulse_source.silenced = active
+        elif name == "pulses":
+            raise ConfigError("fault 'pulses': this module has no pulse source (sync key)")
+        else:
+            super().inject_fault(name, active)
+
+    def configure_from_plant(self, table: Mapping[str, Any], where: str, base_dir: Path) -> None:
+        from fieldtwin.tsx.dem24.plantkeys import configure
+
+        configure(self, table, where, base_dir)
+
+    def status_details(self) -> dict[str, str]:
+        tb = self.timebase
+        now = self.clock.now
+        osc = [i for i, d in enumerate(self.detectors or []) if d.oscillating]
+        return {
+            "time": f"{tb.now(now)} ({tb.state.value})" if tb.ready else tb.state.value,
+            "sync fault": "yes" if tb.fault else "no",
+            "stack": f"{len(self.stack)}/{self.stack.size} (lost {self.stack.total_lost})",
+            "logging": "active" if self.logging else "stopped",
+            "selected": f"H'{self.selected():06X}'",
+            "inputs": f"H'{self.inputs.levels():06X}'",
+            "oscillating": ", ".join(map(str, osc)) or "none",
+            "config": "default" if self.default_config else "user",
+        }
+
     # --- time -----------------------------------------------------------------------
 
-    def receive_pulse(self, now: int) -> None:
-        """IN-SYN pulse: repeated on OUT-SYN, then taken by the time base (DEM 4.1-3)."""
+    def _repeat(self, active: bool, now: int) -> None:
+        """OUT-SYN: "an amplification of the synchronization input" (DEM 1.2-1)."""
         if self.state is ModuleState.OFF:
             return
         for other in self.sync_outputs:
-            other.receive_pulse(now)
+            other.sync_input.set_level(active, now)
+
+    def _take_pulse(self, edge: int) -> None:
+        """A pulse past the filter: taken by the time base at its leading edge (4.1-3)."""
         if self.state is not ModuleState.OPERATIONAL:
             return
+        now = self.clock.now
         self.pulse_image = not self.pulse_image  # DEM 2.4-2 note: Ixy,7 changes at each pulse
-        self._sync_outcome(self.timebase.pulse(now), now)
-        self._arm_loss()
-        self._arm_periodic(now)  # the pulse may have reset the module clock
-
-    def _arm_loss(self) -> None:
-        if self._loss is not None:
-            self._loss.cancel()
-            self._loss = None
-        deadline = self.timebase.loss_deadline()
-        if deadline is not None:
-            self._loss = self.call_at(deadline, self._pulse_lost)
+        self._sync_outcome(self.logbook.pulse(edge, now), now)
 
     def _pulse_lost(self, now: int) -> None:
-        self._loss = None
         self._sync_outcome(self.timebase.pulse_lost(now), now)
 
     def _sync_outcome(self, outcome: SyncOutcome, now: int) -> None:
         if outcome.fault is not None:
             self.set_fault(FB_SYNC, outcome.fault)  # DEM 4.3: application fault, ERR LED
-            self._log_change(CH_SYNC, int(outcome.fault), self._stamp(now))
+            self._log_change(CH_SYNC, int(outcome.fault), self.logbook.stamp(now))
         if outcome.time_set:
             self.log_overall(now)  # DEM 4.2-3: first message after the time is set
-            self._start_periodic(now)  # PER counted in module time from the time setting
         self._refresh_words()
 
     # --- inputs -------------------------------------------------------------------------
@@ -261,35 +342,21 @@ class Dem24Core(Logbook):
     def _accepted(self, channel: int, level: bool, edge: int, stamp: int | None, now: int) -> None:
         self.edges_stamped += 1
         state = int(level)
-        detector = self.detectors[channel] if self.detectors is not None else None
-        if detector is not None:
-            if detector.transition(edge):
-                state = STATE_OSCILLATING  # DEM 2.3-3: shown to be oscillating
-            elif detector.oscillating:
-                state = -1  # DEM 2.3-3: its transitions are no longer indicated
-            self._schedule_osc_check(channel)
+        if self.oscillation is not None:
+            state = self.oscillation.judge(channel, edge, state)  # DEM 2.3-3
         if state >= 0:
             self._log_change(channel, state, stamp)
         self._refresh_words()
 
-    def _schedule_osc_check(self, channel: int) -> None:
-        handle = self._osc_handles[channel]
-        if handle is not None:
-            handle.cancel()
-        assert self.detectors is not None
-        at = self.detectors[channel].next_check()
-        self._osc_handles[channel] = (
-            None if at is None else self.call_at(at, lambda now: self._osc_check(channel, now))
-        )
+    def _normal_again(self, channel: int, now: int) -> None:
+        """An oscillating input is normal again: its state (AMB-DEM-11)."""
+        self._log_change(channel, int(self.inputs.level(channel)), self.logbook.stamp(now))
+        self._refresh_words()
 
-    def _osc_check(self, channel: int, now: int) -> None:
-        self._osc_handles[channel] = None
-        assert self.detectors is not None
-        if self.detectors[channel].check(now):  # normal again: its state (AMB-DEM-11)
-            self._log_change(channel, int(self.inputs.level(channel)), self._stamp(now))
-            self._refresh_words()
-        else:
-            self._schedule_osc_check(channel)
+    def _stop_oscillation(self) -> None:
+        if self.oscillation is not None:
+            self.oscillation.stop()
+        self.oscillation = None
 
     def _update_reading(self, now: int, *, silent: bool = False) -> None:
         if self.state is not ModuleState.OPERATIONAL:
@@ -305,6 +372,75 @@ class Dem24Core(Logbook):
             return
         if self.state is ModuleState.OPERATIONAL:
             self.set_fault(bit, active)
-            self._log_change(channel, int(active), self._stamp(now))  # AMB-DEM-19
+            self._log_change(channel, int(active), self.logbook.stamp(now))  # AMB-DEM-19
         self._update_reading(now)
         self._refresh_words()
+
+    # --- logging ------------------------------------------------------------------------
+
+    @property
+    def logging(self) -> bool:
+        """Messages enter the stack (DEM 2.5-1, 3.4-3, 4.2-3 global stop)."""
+        return (
+            self.logbook.timebase.ready
+            and not self.awaiting_configuration
+            and not get_bit(self.ow[1], OW1_STOP)
+        )
+
+    def selected(self) -> int:
+        """Channels to time-stamp: OWxy,2 (0..15) and OWxy,3 bits 0..7 (DEM 3.2-2)."""
+        return self.ow[2] | ((self.ow[3] & 0xFF) << 16)
+
+    def _log(self, message_type: MessageType, stamp: int | None, body: Body) -> None:
+        if stamp is None or not self.logging or self.state is not ModuleState.OPERATIONAL:
+            return
+        self.set_fault(FB_STACK_FULL, self.logbook.push(message_type, stamp, body))
+
+    def _log_change(self, channel: int, state: int, stamp: int | None) -> None:
+        if channel < CHANNELS and not (self.selected() >> channel) & 1:
+            return  # DEM 3.2-2: channels not selected behave like discrete inputs
+        self._log(MessageType.CHANGE, stamp, change_body(channel, state))
+
+    def log_overall(self, now: int) -> None:
+        """A type 1 message: selection, oscillating channels, states, faults (DEM 4.2-2)."""
+        oscillating = 0 if self.oscillation is None else self.oscillation.oscillating()
+        faults = (
+            self.timebase.fault,
+            not self.terminal_block,
+            self.fault_active(FB_SUPPLY),
+        )
+        body = overall_body(self.selected(), oscillating, self.image(), faults)
+        self._log(MessageType.OVERALL, self.logbook.stamp(now), body)
+        self._refresh_words()
+
+    def read_messages(self, count: int) -> list[Message]:
+        """Remove and return up to ``count`` messages, oldest first (DEM 4.2-3)."""
+        messages = self.logbook.read(count)
+        self.set_fault(FB_STACK_FULL, self.stack.full)
+        self._refresh_words()
+        return messages
+
+    # --- words and bits ------------------------------------------------------------
+
+    def image(self) -> int:
+        """IWxy,6/7: the inputs, or their fallback while unreadable (DEM 3.2-1 DEF)."""
+        if self._readable() or self.config.maintain:
+            return self.inputs.levels()
+        return 0
+
+    def _readable(self) -> bool:
+        """Inputs read: terminal block fitted, monitored supply present (DEM 2.5-6)."""
+        return self.terminal_block and (self.supply or not self.config.supply_monitoring)
+
+    def _refresh_words(self) -> None:
+        if self.state is ModuleState.OFF:
+            return
+        logbook = self.logbook
+        timebase, stack = logbook.timebase, logbook.stack
+        ready, count = timebase.ready, len(stack)
+        supply = self.fault_active(FB_SUPPLY)
+        image = self.image()
+        iw = self.iw
+        iw[2] = status_word(self.diag_word, self.logging, ready, supply, self.default_config)
+        iw[5], iw[6], iw[7] = count, image & 0xFFFF, image >> 16
+        self.i_bits = input_bits(ready, count, stack.full, timebase.fault, self.pulse_image)

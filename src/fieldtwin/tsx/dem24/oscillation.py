@@ -4,21 +4,32 @@ An input becomes oscillating when it changes more than N-MAX times within a slid
 T-MAX window; it is normal again once it changes fewer than N-MIN times within the
 last T-MIN window (AMB-DEM-11).  Windows are half-open: a transition exactly T ago
 has left the window.  The detector is pure: it answers with the next time at which
-the return to normal must be checked, and the module schedules it.
+the return to normal must be checked; the :class:`Monitor` of the 24 inputs schedules
+it.  The two states are a machine of one table (:data:`OSCILLATION`, DESIGN rule 4);
+the counts decide which input it takes, so an edge costs one window count and a table
+lookup only when the state changes.
 """
 
 from __future__ import annotations
 
 import enum
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass
 
-from fieldtwin.clock import S
+from fieldtwin.clock import Handle, S
+from fieldtwin.fsm import Machine, Table
+from fieldtwin.tsx.dem24.stack import STATE_OSCILLATING
 
 
 class OscState(enum.Enum):
     NORMAL = "normal"
     OSCILLATING = "oscillating"
+
+
+class OscEvent(enum.Enum):
+    TOO_MANY = "more than N-MAX changes within T-MAX"
+    FEW = "fewer than N-MIN changes within T-MIN"
 
 
 @dataclass(frozen=True, slots=True)
@@ -36,34 +47,42 @@ class Thresholds:
 class Detector:
     """One channel's transition history and oscillation state."""
 
-    __slots__ = ("_times", "declared_at", "state", "thresholds")
+    __slots__ = ("_times", "declared_at", "machine", "thresholds")
 
     def __init__(self, thresholds: Thresholds) -> None:
         self.thresholds = thresholds
         self._times: deque[int] = deque(maxlen=max(thresholds.n_max + 1, thresholds.n_min))
-        self.state = OscState.NORMAL
+        self.machine: Machine[OscState, OscEvent, Detector] = Machine(
+            OSCILLATION, OscState.NORMAL, self
+        )
         self.declared_at = 0
 
     @property
+    def state(self) -> OscState:
+        return self.machine.state
+
+    @property
     def oscillating(self) -> bool:
-        return self.state is OscState.OSCILLATING
+        return self.machine.state is OscState.OSCILLATING
 
     def transition(self, t: int) -> bool:
         """Count a transition at ``t``; True when it makes the input oscillating."""
         self._times.append(t)
         th = self.thresholds
-        if self.state is OscState.NORMAL and self._count(t, th.t_max_us) > th.n_max:
-            self.state = OscState.OSCILLATING  # DEM 3.2-1 "changes more than N-MAX times"
-            self.declared_at = t
+        if self.machine.state is OscState.NORMAL and self._count(t, th.t_max_us) > th.n_max:
+            self.machine.fire(OscEvent.TOO_MANY, t)  # DEM 3.2-1 "more than N-MAX times"
             return True
         return False
+
+    def _declare(self, t: int) -> None:
+        self.declared_at = t
 
     def _count(self, t: int, window: int) -> int:
         return sum(1 for x in self._times if x > t - window)
 
     def next_check(self) -> int | None:
         """When an oscillating input can first be normal again (None if normal)."""
-        if self.state is OscState.NORMAL:
+        if self.machine.state is OscState.NORMAL:
             return None
         th = self.thresholds
         times = self._times
@@ -73,9 +92,81 @@ class Detector:
 
     def check(self, t: int) -> bool:
         """True when the input returns to normal at ``t`` (DEM 3.2-1 "less than N-MIN")."""
-        if self.state is OscState.OSCILLATING and self._count(t, self.thresholds.t_min_us) < (
-            self.thresholds.n_min
-        ):
-            self.state = OscState.NORMAL
+        if self.machine.state is OscState.OSCILLATING and self._count(
+            t, self.thresholds.t_min_us
+        ) < (self.thresholds.n_min):
+            self.machine.fire(OscEvent.FEW)
             return True
         return False
+
+
+OSCILLATION: Table[OscState, OscEvent] = Table(
+    "DEM oscillating input",
+    OscState,
+    OscEvent,
+    {
+        (OscState.NORMAL, OscEvent.TOO_MANY): (Detector._declare, OscState.OSCILLATING),
+        (OscState.OSCILLATING, OscEvent.FEW): (None, OscState.NORMAL),
+    },
+)
+
+
+Schedule = Callable[[int, Callable[[int], None]], Handle]
+
+
+class Monitor:
+    """The detectors of the 24 inputs under one configuration, and their checks.
+
+    ``normal(channel, now)`` is called when an input is normal again (AMB-DEM-11).
+    """
+
+    __slots__ = ("_handles", "_normal", "_schedule", "detectors")
+
+    def __init__(
+        self,
+        thresholds: Thresholds,
+        channels: int,
+        schedule: Schedule,
+        normal: Callable[[int, int], None],
+    ) -> None:
+        self.detectors = [Detector(thresholds) for _ in range(channels)]
+        self._handles: list[Handle | None] = [None] * channels
+        self._schedule = schedule
+        self._normal = normal
+
+    def judge(self, channel: int, edge: int, state: int) -> int:
+        """The state to log for a change at ``edge``: ``state``, 2 = oscillating, or -1
+        while oscillating (DEM 2.3-3 "its transitions will no longer be indicated")."""
+        detector = self.detectors[channel]
+        if detector.transition(edge):
+            state = STATE_OSCILLATING
+        elif detector.machine.state is OscState.OSCILLATING:
+            state = -1
+        self._arm(channel)
+        return state
+
+    def oscillating(self) -> int:
+        """Bit i set while input i is oscillating (DEM 4.2-2 overall-state message)."""
+        return sum(int(d.oscillating) << i for i, d in enumerate(self.detectors))
+
+    def stop(self) -> None:
+        for handle in self._handles:
+            if handle is not None:
+                handle.cancel()
+        self._handles = [None] * len(self.detectors)
+
+    def _arm(self, channel: int) -> None:
+        handle = self._handles[channel]
+        if handle is not None:
+            handle.cancel()
+        at = self.detectors[channel].next_check()
+        self._handles[channel] = (
+            None if at is None else self._schedule(at, lambda now: self._check(channel, now))
+        )
+
+    def _check(self, channel: int, now: int) -> None:
+        self._handles[channel] = None
+        if self.detectors[channel].check(now):
+            self._normal(channel, now)
+        else:
+            self._arm(channel)

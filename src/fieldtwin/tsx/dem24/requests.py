@@ -22,7 +22,7 @@ from fieldtwin.tsx.textblock import MODULE_SYSTEM, V_ERROR, V_OK_WRITE, Answer, 
 from fieldtwin.words import bytes_to_words, words_to_bytes
 
 if TYPE_CHECKING:
-    from fieldtwin.tsx.dem24.module import Dem24Core as Dem24
+    from fieldtwin.tsx.dem24.module import Dem24
 
 REQ_READ = 0x01
 REQ_TIME = 0x02
@@ -69,7 +69,7 @@ def write_time(mod: Dem24, data: bytes, now: int, capacity: int) -> Answer:
         mod.set_fault(FB_TIME_REFUSED, True)
         return Answer(v=V_ERROR)
     mod.set_fault(FB_TIME_REFUSED, False)
-    mod.timebase.reference(ref, now)
+    mod.logbook.reference(ref, now)  # taken at the next pulse (4.1-3)
     mod.refresh_status()
     return Answer(v=V_OK_WRITE)
 

@@ -35,6 +35,9 @@ STATE_ON = 1
 STATE_OSCILLATING = 2
 
 
+Body = tuple[int, int, int, int, int, int]  # words 7..12
+
+
 class MessageType(enum.IntEnum):
     CHANGE = 0  # change of an input state
     OVERALL = 1  # general state of the inputs
@@ -50,7 +53,7 @@ class Message:
     indicator: int  # modification indicator in force
     rack: int
     slot: int
-    body: tuple[int, int, int, int, int, int]
+    body: Body
     overflow: bool = False  # at least one message lost before this one
 
     @property
@@ -87,14 +90,14 @@ class Message:
         ]
 
 
-def change_body(channel: int, state: int) -> tuple[int, int, int, int, int, int]:
+def change_body(channel: int, state: int) -> Body:
     """Words 7..12 of a change message: channel / state, then reserved = 0 (AMB-DEM-21)."""
     return ((channel << 8) | state, 0, 0, 0, 0, 0)
 
 
 def overall_body(
     selected: int, oscillating: int, states: int, faults: tuple[bool, bool, bool]
-) -> tuple[int, int, int, int, int, int]:
+) -> Body:
     """Words 7..12 of an overall-state message: 24-bit vectors, faults 24..26 (AMB-DEM-06)."""
     status = states | sum(int(f) << (24 + i) for i, f in enumerate(faults))
     return (

@@ -15,12 +15,10 @@ disappears two pulses after a new time is received (4.1-3).
 from __future__ import annotations
 
 import enum
-from collections.abc import Callable
 from dataclasses import dataclass
-from typing import ClassVar
 
 from fieldtwin.clock import MS
-from fieldtwin.errors import ProtocolError
+from fieldtwin.fsm import Machine, Table
 from fieldtwin.tsx.dem24.civil import CivilTime, full_year, valid_fields
 from fieldtwin.words import bytes_to_words
 
@@ -117,15 +115,17 @@ class SyncOutcome:
     fault: bool | None = None  # the synchronization fault appeared / disappeared
 
 
-_Action = Callable[["Timebase", int], SyncOutcome]
+NOTHING = SyncOutcome()
 
 
 class Timebase:
-    """The time-reference machine (DESIGN rule 4: one transition table)."""
+    """The time-reference machine (DESIGN rule 4: :data:`TIMEBASE`, one table)."""
 
     def __init__(self, t_syn_s: int = 60, drift_ms: int = 2, drift_ppm: float = 0.0) -> None:
         self.clock = ModuleClock(drift_ppm)
-        self.state = TimeState.NOT_SET
+        self.machine: Machine[TimeState, SyncEvent, Timebase] = Machine(
+            TIMEBASE, TimeState.NOT_SET, self
+        )
         self.t_syn_ms = t_syn_s * 1000
         self.drift_ms = drift_ms
         self.indicator = 0
@@ -136,6 +136,11 @@ class Timebase:
         self._arm_clear = False
         self.last_ref_ms = 0  # system time at the last pulse
         self.last_pulse_us: int | None = None
+        self._outcome = NOTHING  # what the last action found
+
+    @property
+    def state(self) -> TimeState:
+        return self.machine.state
 
     # --- inputs -----------------------------------------------------------------
 
@@ -163,25 +168,17 @@ class Timebase:
     @property
     def ready(self) -> bool:
         """Date set and pulse received (DEM 2.4-2 note (1)): Ixy,0 / IWxy,2,7."""
-        return self.state in (TimeState.SET, TimeState.SET_RECEIVED)
+        return self.machine.state in _READY
 
     def now(self, t: int) -> CivilTime:
         return CivilTime.from_ms(self.clock.ms(t))
 
-    # --- the machine ---------------------------------------------------------------
+    # --- the actions of the table ------------------------------------------------------
 
     def _fire(self, event: SyncEvent, t: int) -> SyncOutcome:
-        try:
-            action, target = self._TRANSITIONS[(self.state, event)]
-        except KeyError:
-            raise ProtocolError(
-                f"DEM time base: can't handle {event.value!r} in state {self.state.value}"
-            ) from None
-        self.state = target
-        return action(self, t)
-
-    def _nothing(self, t: int) -> SyncOutcome:
-        return SyncOutcome()
+        self._outcome = NOTHING
+        self.machine.fire(event, t)
+        return self._outcome
 
     def _candidate(self) -> int:
         assert self.pending is not None
@@ -189,63 +186,81 @@ class Timebase:
         received = self.pending.time.to_ms()
         return -(-received // step) * step + (self._pending_pulses - 1) * step
 
-    def _adopt(self, t: int) -> SyncOutcome:
+    def _adopt(self, t: int) -> None:
         assert self.pending is not None
         value = self._candidate()
         self.clock.set_ms(t, value)
         self.last_ref_ms, self.indicator = value, self.pending.indicator
         self.pending = None
         self._arm_clear = self.fault  # 4.1-3: fault gone two pulses after the time
-        return SyncOutcome(time_set=True)
+        self._outcome = SyncOutcome(time_set=True)
 
-    def _adopt_checked(self, t: int) -> SyncOutcome:
+    def _adopt_checked(self, t: int) -> None:
         assert self.pending is not None
         if self.fault or self.pending.indicator != self.indicator:
-            return self._adopt(t)  # 4.1-3: a new indicator skips the check
+            self._adopt(t)  # 4.1-3: a new indicator skips the check
+            return
         candidate = self._candidate()
         if abs(self.clock.ms(t) - candidate) > self.drift_ms:
             self.pending, self.last_ref_ms = None, candidate
-            return self._raise()
-        return self._adopt(t)
+            self._raise(t)
+            return
+        self._adopt(t)
 
-    def _check(self, t: int) -> SyncOutcome:
+    def _check(self, t: int) -> None:
         local = self.clock.ms(t)
         step = self.t_syn_ms
         k = max(1, round((local - self.last_ref_ms) / step))
         expected = self.last_ref_ms + k * step
         self.last_ref_ms = expected
         if abs(local - expected) > self.drift_ms:  # 4.1-3 drift above DRIFT
-            return self._raise()
-        outcome = SyncOutcome()
+            self._raise(t)
+            return
         if self.fault and self._arm_clear:
             self.fault = self._arm_clear = False
-            outcome = SyncOutcome(fault=False)
+            self._outcome = SyncOutcome(fault=False)
         if not self.fault:
             self.clock.set_ms(t, expected)  # 7.2: the pulse resets the card clock
-        return outcome
 
-    def _raise(self, t: int | None = None) -> SyncOutcome:
+    def _raise(self, t: int) -> None:
         self._arm_clear = False
-        if self.fault:
-            return SyncOutcome()
-        self.fault = True
-        return SyncOutcome(fault=True)
+        if not self.fault:
+            self.fault = True
+            self._outcome = SyncOutcome(fault=True)
 
-    def _lost(self, t: int) -> SyncOutcome:
-        return self._raise()
 
-    _TRANSITIONS: ClassVar[dict[tuple[TimeState, SyncEvent], tuple[_Action, TimeState]]] = {
-        (TimeState.NOT_SET, SyncEvent.REFERENCE): (_nothing, TimeState.RECEIVED),
-        (TimeState.NOT_SET, SyncEvent.FIRST_PULSE): (_nothing, TimeState.NOT_SET),
-        (TimeState.NOT_SET, SyncEvent.PULSE): (_nothing, TimeState.NOT_SET),
-        (TimeState.RECEIVED, SyncEvent.REFERENCE): (_nothing, TimeState.RECEIVED),
+_READY = frozenset({TimeState.SET, TimeState.SET_RECEIVED})
+
+_NS, _RX, _SET, _SRX = (
+    TimeState.NOT_SET,
+    TimeState.RECEIVED,
+    TimeState.SET,
+    TimeState.SET_RECEIVED,
+)
+_REF, _FIRST, _PULSE, _LOST = (
+    SyncEvent.REFERENCE,
+    SyncEvent.FIRST_PULSE,
+    SyncEvent.PULSE,
+    SyncEvent.PULSE_LOST,
+)
+
+TIMEBASE: Table[TimeState, SyncEvent] = Table(
+    "DEM time base",
+    TimeState,
+    SyncEvent,
+    {
+        (_NS, _REF): (None, _RX),
+        (_NS, _FIRST): (None, _NS),
+        (_NS, _PULSE): (None, _NS),
+        (_RX, _REF): (None, _RX),
         # 2.3-1: after a power-up the first pulse only starts the period, a second is needed
-        (TimeState.RECEIVED, SyncEvent.FIRST_PULSE): (_nothing, TimeState.RECEIVED),
-        (TimeState.RECEIVED, SyncEvent.PULSE): (_adopt, TimeState.SET),
-        (TimeState.SET, SyncEvent.REFERENCE): (_nothing, TimeState.SET_RECEIVED),
-        (TimeState.SET, SyncEvent.PULSE): (_check, TimeState.SET),
-        (TimeState.SET, SyncEvent.PULSE_LOST): (_lost, TimeState.SET),
-        (TimeState.SET_RECEIVED, SyncEvent.REFERENCE): (_nothing, TimeState.SET_RECEIVED),
-        (TimeState.SET_RECEIVED, SyncEvent.PULSE): (_adopt_checked, TimeState.SET),
-        (TimeState.SET_RECEIVED, SyncEvent.PULSE_LOST): (_lost, TimeState.SET_RECEIVED),
-    }
+        (_RX, _FIRST): (None, _RX),
+        (_RX, _PULSE): (Timebase._adopt, _SET),
+        (_SET, _REF): (None, _SRX),
+        (_SET, _PULSE): (Timebase._check, _SET),
+        (_SET, _LOST): (Timebase._raise, _SET),
+        (_SRX, _REF): (None, _SRX),
+        (_SRX, _PULSE): (Timebase._adopt_checked, _SET),
+        (_SRX, _LOST): (Timebase._raise, _SRX),
+    },
+)
