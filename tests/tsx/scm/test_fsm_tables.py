@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from fieldtwin.fsm import Machine
+from fieldtwin.fsm import Machine, tables
 from fieldtwin.tsx.scm import requests as reqmod
 from fieldtwin.tsx.scm.fullduplex import FD_READ, FD_WRITE, Direction, FdInput, FullDuplexChannel
 from fieldtwin.tsx.scm.halfduplex import HALF_DUPLEX, HalfDuplexChannel, HdInput, HdState
@@ -94,3 +94,8 @@ def test_half_duplex_sequences_of_forced_pairs(steps: list[tuple[HdState, HdInpu
 )
 def test_full_duplex_sequences_of_forced_pairs(name: str, steps: list[tuple[Any, FdInput]]) -> None:
     check_sequence(FD_RIGS[name], steps)
+
+
+def test_every_scm_table_is_walked() -> None:
+    scm = {table.name for table in tables() if table.name.startswith("SCM ")}
+    assert scm == {HALF_DUPLEX.name, FD_WRITE.name, FD_READ.name}
