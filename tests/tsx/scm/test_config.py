@@ -21,7 +21,7 @@ def test_3_3_write_configuration_example() -> None:
     assert plc.read("IW7,1,3") == 1 and plc.read("IW7,1,B") == 0
     assert plc.read("IW7,0,B") == 0  # AMB-SCM-5: 1 only while no channel is configured
     cfg = mod.configs[0]
-    assert (cfg.baud, str(cfg.fmt), cfg.rx_echo, cfg.back_space) == (9600, "8N2", True, True)
+    assert (cfg.baud, cfg.fmt.frame, cfg.rx_echo, cfg.back_space) == (9600, "8N2", True, True)
     assert cfg.erc.valid1 and not cfg.erc.incl1 and cfg.erc.char1 == 0x0D
     assert not cfg.etc.valid1 and not cfg.tx_echo
 

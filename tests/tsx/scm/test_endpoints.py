@@ -25,6 +25,14 @@ def _read(port: serial.Serial, count: int) -> bytes:
     return bytes(port.read(count))
 
 
+def _waiting(sock: socket.socket) -> int:
+    """Bytes the peer socket could read now (without reading them)."""
+    try:
+        return len(sock.recv(64, socket.MSG_PEEK | socket.MSG_DONTWAIT))
+    except BlockingIOError:
+        return 0
+
+
 @pytest.fixture
 def hd() -> Iterator[tuple[Plc, object, serial.Serial]]:
     plc, mod = _plc("TSX SCM 2011", FAST)
@@ -37,13 +45,22 @@ def hd() -> Iterator[tuple[Plc, object, serial.Serial]]:
     mod.detach(0)  # type: ignore[attr-defined]
 
 
-def test_pty_reception_with_end_character_and_echo(hd: tuple[Plc, object, serial.Serial]) -> None:
+# 0.0225: read at once, the CR is received 0.6 ms before an end of task (the race)
+@pytest.mark.parametrize("lead_s", [0.02, 0.0225])
+def test_pty_reception_with_end_character_and_echo(
+    hd: tuple[Plc, object, serial.Serial], lead_s: float
+) -> None:
     plc, mod, port = hd
     tb = plc.start_exchange(m=0x0700, c=0x03, send=[0x0050, 20], recv_bytes=20)  # 5 s
-    plc.advance(0.02)
+    plc.advance(lead_s)
     port.write(b"hello\r")
     assert plc._run_until(lambda: tb.done, 5_000_000)
     assert tb.result is not None and (tb.result.v, tb.result.data) == (1, b"hello")
+    # The request ends when the CR is received; its echo leaves one character time later
+    # (test_3_2_echo_of_the_end_character_follows_the_end_of_the_request): keep the
+    # simulation running until the whole echo is at the peer, never read it from a
+    # stopped simulation (the race of issue 10 item 14).
+    assert plc._run_until(lambda: port.in_waiting >= 6, 5_000_000)
     assert _read(port, 6) == b"hello\r"  # the reception echo reaches the peer
 
 
@@ -94,6 +111,7 @@ def test_tcp_loopback_endpoint() -> None:
         sock.sendall(b"tcp\r")
         assert plc._run_until(lambda: tb.done, 5_000_000)
         assert tb.result is not None and tb.result.data == b"tcp"
+        assert plc._run_until(lambda: _waiting(sock) >= 4, 5_000_000)  # the CR's echo too
         sock.settimeout(2)
         got = b""
         while len(got) < 4:

@@ -214,3 +214,13 @@ def test_4_4_write_time_out_and_read_time_out_bits() -> None:
     assert rx.v == 0xFD
     r = plc.exchange(m=0x0263, c=0x47, recv_bytes=6, txt=31)
     assert int.from_bytes(r.data, "little") >> 42 & 1  # channel 1 READ time-out (bit A)
+
+
+def test_5_2_back_space_without_echo_is_counted_on_the_4_6_channel() -> None:
+    # SCM 4.6 table (examples/scm.toml channel 1): back-space validated, no reception echo;
+    # 5.2 note: only "if reception echo is configured" does a BS decrement IWxy,4
+    plc, mod, peer = fd()
+    peer.send(b"ab\x08")
+    plc.advance(0.03)
+    assert plc.read("IW2,4") == 3 and plc.read("IW2,3") == 0x08
+    assert peer.receive() == b""  # no echo at all

@@ -246,3 +246,21 @@ def test_half_duplex_channel_ignores_characters_between_requests() -> None:
     plc.advance(0.05)
     assert tb.result is not None and tb.result.data == b"ok"
     assert SLOT == 7
+
+
+def test_3_2_echo_of_the_end_character_follows_the_end_of_the_request() -> None:
+    # SCM 3.2 reception echo: "Any character received by the module while executing a
+    # reception request is immediately sent back"; 4.2: the request ends on the end
+    # character.  The CR's echo is still on the line (one character time) when the end
+    # of task after it sets TXTi,D: a peer must not expect it when the request has ended.
+    plc, mod, peer = ready(words=CONFIG_3_3)
+    tb = plc.start_exchange(m=m(0), c=0x04, send=[20], recv_bytes=20)
+    task = plc.now + 2 * plc.scan_us  # the request reaches the module at the next task
+    cr_received = task - 500  # 0.5 ms before the end of task that follows
+    plc.advance((cr_received - 6 * CHAR_US_9600_8N2 - plc.now) / 1e6)
+    peer.send(b"hello\r")
+    assert plc._run_until(lambda: tb.done, 1_000_000) and plc.now == task
+    assert tb.result is not None and (tb.result.v, tb.result.data) == (1, b"hello")
+    assert peer.receive() == b"hello"  # the echo of the CR has not left yet
+    plc.advance(0.002)
+    assert peer.receive() == b"\r"

@@ -8,17 +8,19 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from fieldtwin.charformat import CharFormat, Parity
 from fieldtwin.errors import ConfigError
 from fieldtwin.plant import load_plant
-from fieldtwin.tsx.scm.line import ALLOWED_FORMATS, CharFormat, Parity, char_time_us, decode_stream
+from fieldtwin.tsx.scm.line import ALLOWED_FRAMES, decode_stream
 
 EXAMPLE = Path(__file__).resolve().parents[3] / "examples" / "scm.toml"
-FORMATS = sorted(ALLOWED_FORMATS, key=str)
+# the eight formats of SCM 3.2, at 9600 baud
+FORMATS = [CharFormat(9600, int(f[0]), Parity(f[1]), int(f[2])) for f in sorted(ALLOWED_FRAMES)]
 
 
 @given(st.binary(min_size=1, max_size=40), st.sampled_from(FORMATS))
 def test_same_format_reads_back_exactly(data: bytes, fmt: CharFormat) -> None:
-    chars = decode_stream(data, fmt, 9600, fmt, 9600)
+    chars = decode_stream(data, fmt, fmt)
     assert bytes(c.value for c in chars) == bytes(b & fmt.mask for b in data)
     assert not any(c.parity_error or c.format_error for c in chars)
     assert chars[-1].offset_us == round(len(data) * fmt.bits * 1e6 / 9600)
@@ -28,20 +30,20 @@ def test_same_format_reads_back_exactly(data: bytes, fmt: CharFormat) -> None:
 def test_any_pair_of_formats_decodes_without_crashing(
     data: bytes, sender: CharFormat, receiver: CharFormat
 ) -> None:
-    chars = decode_stream(data, sender, 9600, receiver, 9600)
+    chars = decode_stream(data, sender, receiver)
     assert all(0 <= c.value <= receiver.mask for c in chars)
 
 
 def test_7e1_sender_to_8n1_receiver_gets_the_parity_bit_as_bit_7() -> None:
-    chars = decode_stream(b"A", CharFormat(7, Parity.EVEN, 1), 9600, CharFormat(8), 9600)
+    chars = decode_stream(b"A", CharFormat(9600, 7, Parity.EVEN, 1), CharFormat(9600, 8))
     assert [c.value for c in chars] == [0x41]  # 'A' has an even number of 1s: parity bit 0
-    chars = decode_stream(b"C", CharFormat(7, Parity.EVEN, 1), 9600, CharFormat(8), 9600)
+    chars = decode_stream(b"C", CharFormat(9600, 7, Parity.EVEN, 1), CharFormat(9600, 8))
     assert [c.value for c in chars] == [0xC3]
 
 
 def test_character_times() -> None:
-    assert char_time_us(CharFormat(8, Parity.NONE, 2), 9600) == 1146  # 11 bits
-    assert char_time_us(CharFormat(7, Parity.EVEN, 1), 75) == 133_333  # 10 bits
+    assert CharFormat(9600, 8, Parity.NONE, 2).char_time_us == 1146  # 11 bits
+    assert CharFormat(75, 7, Parity.EVEN, 1).char_time_us == 133_333  # 10 bits
 
 
 def test_example_plant_wires_a_pty_and_configures_channel_0() -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from fieldtwin.errors import ConfigError
+from fieldtwin.live import mode
 from fieldtwin.tsx.plc import Plc
 from fieldtwin.tsx.scm import MODULE_TYPES, VARIANTS
 from tests.tsx.scm.helpers import (
@@ -204,3 +205,19 @@ def test_6_3_format_fault_on_21_full_duplex_and_injected() -> None:
     assert fault_bits(plc) >> 45 & 1
     with pytest.raises(ConfigError):
         mod.inject_fault("nonsense", True)
+
+
+def test_1_2_status_shows_no_run_stop_mode() -> None:
+    # SCM 1.2: an OK and an F light only; 5.2 IWxy,0,C "A request is being executed"
+    # (AMB-SCM-26): the module has no Run/Stop mode, status and the live view show none
+    plc, mod, peer = ready()
+    tb = plc.start_exchange(m=m(0), c=0x04, send=[5], recv_bytes=5)
+    plc.advance(0.02)
+    assert plc.read("IW7,0,C") == 1 and mod.active and not mod.running
+    status = mod.status()
+    assert "mode" not in status and status["activity"] == "executing a request"
+    assert mode(mod) == "operational"
+    peer.send(b"12345")
+    plc.advance(0.03)
+    assert tb.done and mod.status()["activity"] == "awaiting a request"
+    assert mode(mod) == "operational" and "Stop" not in mode(mod)

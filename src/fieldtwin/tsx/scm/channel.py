@@ -16,7 +16,7 @@ from typing import Protocol
 from fieldtwin.clock import Handle
 from fieldtwin.tsx.scm.adaptors import Signals
 from fieldtwin.tsx.scm.config import ChannelConfig
-from fieldtwin.tsx.scm.line import Line, RxChar
+from fieldtwin.tsx.scm.line import ECHO_BACKLOG, Line, RxChar
 from fieldtwin.tsx.scm.requests import Job
 from fieldtwin.tsx.textblock import V_ERROR, Answer, Exchange
 
@@ -66,8 +66,9 @@ class Channel:
         line.on_char = self._on_line_char
         line.on_sent = self.on_sent
         line.tx_allowed = self.tx_allowed
+        line.on_overrun = self._on_overrun
         if config is not None:
-            line.fmt, line.baud = config.fmt, config.baud
+            line.fmt = config.fmt
         line.half_speed = signals.half_speed
         line.invert_rx = signals.rx_inverted
 
@@ -163,3 +164,20 @@ class Channel:
 
     def on_char(self, value: int, now: int) -> None:
         """A character received (after flow control) while configured."""
+
+    def _on_overrun(self, lost: int, now: int) -> None:
+        if not self.signals.receive_enabled or self.config is None:
+            return  # nothing was being received: nothing to report
+        self.overrun(now)
+        self.host.changed()
+
+    def overrun(self, now: int) -> None:
+        """Characters came faster than the line carries them and were lost (SCM 6.3).
+
+        A half-duplex channel has no fault bit for it (the 3rd word of the fault bit
+        string of the 20 names none): the characters are only lost.
+        """
+
+    def echo(self, chars: bytes, now: int, tag: str = "") -> None:
+        """Send a reception echo (SCM 3.2), bounded: an echo that cannot keep up is cut."""
+        self.line.send(chars, now, tag=tag, limit=ECHO_BACKLOG)

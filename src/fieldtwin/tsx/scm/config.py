@@ -11,14 +11,18 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass
 
+from fieldtwin.charformat import CharFormat, Parity
 from fieldtwin.clock import MS
-from fieldtwin.tsx.scm.line import ALLOWED_FORMATS, CharFormat, Parity
+from fieldtwin.tsx.scm.line import ALLOWED_FRAMES, allowed
 from fieldtwin.words import bcd_encode, bytes_to_words, is_bcd, nibble, words_to_bytes
 
 HALF_DUPLEX_BYTES = 16  # SCM 3.2: 8 words
 FULL_DUPLEX_BYTES = 18  # SCM 3.2: 9 words
 ECHO_TIMEOUT_BASE_US = 50 * MS  # SCM 3.2 "A 50 millisecond time base is used"
 ECHO_RETRIES = 3  # SCM 3.2 "the character is sent again and 3 more tries are made"
+
+# SCM 3.2 "Parity: 0 no parity, 1 odd parity, 2 even parity" -> the kernel's Parity
+PARITY_CODES = {0: Parity.NONE, 1: Parity.ODD, 2: Parity.EVEN}
 
 # SCM 3.2 speed lists (AMB-SCM-02: taken literally); 19200 is coded H'1920' (AMB-SCM-03)
 SPEEDS = {
@@ -62,8 +66,7 @@ class ChannelConfig:
     """A decoded, accepted channel configuration."""
 
     function: Function
-    fmt: CharFormat
-    baud: int
+    fmt: CharFormat  # speed included (SCM 3.2 "transmission speed")
     rx_echo: bool = False
     auto_lf: bool = False
     xon_xoff_tx: bool = False
@@ -79,6 +82,10 @@ class ChannelConfig:
     echo_type: int = 0
     silence_chars: int = 0
     words: tuple[int, ...] = ()  # the table as written, for read configuration (6.3)
+
+    @property
+    def baud(self) -> int:
+        return self.fmt.baud
 
     @property
     def full_duplex(self) -> bool:
@@ -112,13 +119,16 @@ def decode_speed(word: int, channel: int) -> int:
     return baud
 
 
-def decode_format(word: int) -> tuple[Function, CharFormat]:
+def decode_format(word: int, speed: int, channel: int) -> tuple[Function, CharFormat]:
+    """Words 1 and 2 of a table: function and character format, then the speed."""
     function, data_bits, parity, stop = (nibble(word, i) for i in (3, 2, 1, 0))
-    if function > 1 or parity > 2:
+    if function > 1 or parity not in PARITY_CODES:
         raise Refused(f"function {function} / parity {parity} out of range")
-    fmt = CharFormat(data_bits, Parity(parity), stop)
-    if fmt not in ALLOWED_FORMATS:
-        raise Refused(f"character format {fmt} is not one of the eight allowed")
+    frame = f"{data_bits}{PARITY_CODES[parity].letter}{stop}"
+    if frame not in ALLOWED_FRAMES:
+        raise Refused(f"character format {frame} is not one of the eight allowed")
+    fmt = CharFormat(decode_speed(speed, channel), data_bits, PARITY_CODES[parity], stop)
+    assert allowed(fmt)
     return Function(function), fmt
 
 
@@ -143,7 +153,7 @@ def decode(data: bytes, channel: int, full_duplex_allowed: bool) -> ChannelConfi
     if len(data) not in (HALF_DUPLEX_BYTES, FULL_DUPLEX_BYTES):
         raise Refused(f"TXTi,L = {len(data)} (allowed 16 or 18)")  # SCM 3.3
     w = bytes_to_words(data)
-    function, fmt = decode_format(w[0])
+    function, fmt = decode_format(w[0], w[1], channel)
     expected = FULL_DUPLEX_BYTES if function is Function.FULL_DUPLEX else HALF_DUPLEX_BYTES
     if len(data) != expected:
         raise Refused(f"function {function.value} needs a table of {expected} bytes")
@@ -152,7 +162,6 @@ def decode(data: bytes, channel: int, full_duplex_allowed: bool) -> ChannelConfi
     common = {
         "function": function,
         "fmt": fmt,
-        "baud": decode_speed(w[1], channel),
         "rx_echo": _flag(w[3], 3, "Rec. echo"),
         "auto_lf": _flag(w[3], 2, "Auto-LF"),
         "xon_xoff_tx": _flag(w[3], 1, "Xon-Xoff (T)"),

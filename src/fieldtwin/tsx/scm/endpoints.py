@@ -9,16 +9,13 @@ by the PLC's runner, which then paces simulated time to the wall clock.
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from fieldtwin.charformat import CharFormat, Parity
 from fieldtwin.clock import SimClock
 from fieldtwin.errors import ConfigError, TransportError
-from fieldtwin.tsx.scm.line import CharFormat, Line, Parity
-
-Deliver = Callable[[bytes, int, CharFormat | None, float | None], None]
-_PARITY = {"N": Parity.NONE, "O": Parity.ODD, "E": Parity.EVEN}
+from fieldtwin.tsx.scm.line import Line
 
 
 class MemoryPeer:
@@ -28,29 +25,28 @@ class MemoryPeer:
     peer_path: str | None = None
     is_real = False
 
-    def __init__(self, clock: SimClock, deliver: Deliver) -> None:
+    def __init__(self, clock: SimClock, line: Line) -> None:
         self.closed = False
         self.format: CharFormat | None = None  # None: the channel's own format and speed
-        self.baud: float | None = None
+        self.baud: int | None = None  # None: the channel's present speed
         self.log: list[tuple[int, int]] = []  # (simulated time, byte) of what the module sent
         self._clock = clock
-        self._deliver = deliver
+        self._line = line
         self._inbox = bytearray()
 
     def set_format(
-        self, data_bits: int = 8, parity: str = "N", stop_bits: int = 1, baud: float | None = None
+        self, data_bits: int = 8, parity: str = "N", stop_bits: int = 1, baud: int | None = None
     ) -> None:
         """Make the peer's UART differ from the channel's (SCM 6.3 parity / format faults)."""
-        if parity.upper() not in _PARITY:
-            raise ConfigError(f"peer parity {parity!r} not allowed (allowed N, O, E)")
-        self.format = CharFormat(data_bits, _PARITY[parity.upper()], stop_bits)
+        fmt = Parity.parse(parity, "peer parity")
+        self.format = CharFormat(baud or self._line.baud, data_bits, fmt, stop_bits)
         self.baud = baud
 
     def send(self, data: bytes) -> None:
         """Characters typed by the peer now (simulated time); they arrive at the peer's pace."""
         if self.closed:
             raise TransportError("cannot send on the memory peer: it is closed")
-        self._deliver(bytes(data), self._clock.now, self.format, self.baud)
+        self._line.feed(bytes(data), self._clock.now, self.format, peer_speed=self.baud is not None)
 
     def receive(self) -> bytes:
         data = bytes(self._inbox)
@@ -83,7 +79,7 @@ class Port:
     settings_given: bool = False  # the URL fixed baud/parity/data/stop: never follow
     follow_error: str | None = None
 
-    def follow(self, fmt: CharFormat, baud: int) -> None:
+    def follow(self, fmt: CharFormat) -> None:
         """Set a host serial port to the channel's configured format and speed (SCM 3.2).
 
         A port that refuses a setting keeps its previous one; ``follow_error`` says so
@@ -95,7 +91,7 @@ class Port:
             return
         self.follow_error = None
         wanted = {"bytesize": fmt.data_bits, "parity": fmt.parity.letter, "stopbits": fmt.stop_bits}
-        for key, value in {"baudrate": baud, **wanted}.items():
+        for key, value in {"baudrate": fmt.baud, **wanted}.items():
             old = getattr(port, key)
             if old == value:
                 continue
@@ -148,7 +144,7 @@ def open_real(url: str, line: Line, runner: Any) -> Port:
     port = Port(url, line, runner=runner, settings_given=given)
     fmt = line.fmt
     settings = endpoint.settings if given else None
-    settings = settings or LineSettings(line.baud, fmt.data_bits, fmt.parity.letter, fmt.stop_bits)
+    settings = settings or LineSettings(fmt.baud, fmt.data_bits, fmt.parity.letter, fmt.stop_bits)
     if endpoint.scheme == "pty":
         port.peer = open_pty(settings)
         port.path = port.peer.peer_path

@@ -12,11 +12,13 @@ from __future__ import annotations
 
 import enum
 from collections.abc import Callable
-from typing import Any, ClassVar
 
 from fieldtwin.clock import Handle
-from fieldtwin.errors import ProtocolError
-from fieldtwin.tsx.scm.channel import BS, SP, XOFF, XON, AppFault, Channel
+from fieldtwin.fsm import Machine, Table
+from fieldtwin.tsx.scm.adaptors import Signals
+from fieldtwin.tsx.scm.channel import BS, SP, XOFF, XON, AppFault, Channel, Host
+from fieldtwin.tsx.scm.config import ChannelConfig
+from fieldtwin.tsx.scm.line import Line
 from fieldtwin.tsx.scm.requests import Job, JobKind
 from fieldtwin.tsx.textblock import V_ERROR, Answer, Exchange
 
@@ -36,34 +38,50 @@ class FdInput(enum.Enum):
     ABORT = "reset"
 
 
-# one table for each side of the channel: the transmitter and the reader
-TRANSITIONS: dict[tuple[Side, FdInput], tuple[str, Side]] = {
-    (Side.IDLE, FdInput.START): ("begin", Side.BUSY),
-    (Side.IDLE, FdInput.ABORT): ("noop", Side.IDLE),
-    (Side.BUSY, FdInput.DONE): ("end", Side.IDLE),
-    (Side.BUSY, FdInput.TIMEOUT): ("time_out", Side.IDLE),
-    (Side.BUSY, FdInput.ABORT): ("stop", Side.IDLE),
-}
+class Direction(enum.Enum):
+    """The two sides of a full-duplex channel, each with its own machine (SCM 4.4)."""
+
+    WRITE = "write"
+    READ = "read"
+
+
+_W, _R = Direction.WRITE, Direction.READ
 
 
 class FullDuplexChannel(Channel):
-    """Channel 1 of a 21xy configured with function 1."""
+    """Channel 1 of a 21xy configured with function 1; its tables are ``FD_WRITE``/``FD_READ``."""
 
-    SIDES: ClassVar[tuple[str, str]] = ("write", "read")
-
-    def __init__(self, *args: Any) -> None:
-        super().__init__(*args)
+    def __init__(
+        self,
+        host: Host,
+        index: int,
+        line: Line,
+        signals: Signals,
+        config: ChannelConfig | None,
+    ) -> None:
+        super().__init__(host, index, line, signals, config)
         self.buffer = bytearray()
         self.ends: list[tuple[int, int]] = []  # (end position in the buffer, report)
         self.overflow = False
         self.last_char = 0
         self.echoed = 0  # buffer characters already echoed
         self.xoff_sent = False
-        self.side = {"write": Side.IDLE, "read": Side.IDLE}
-        self.jobs: dict[str, Job | None] = {"write": None, "read": None}
-        self.exchanges: dict[str, Exchange | None] = {"write": None, "read": None}
-        self.timers: dict[str, Handle | None] = {"write": None, "read": None}
+        self.machines: dict[Direction, Machine[Side, FdInput, FullDuplexChannel]] = {
+            _W: Machine(FD_WRITE, Side.IDLE, self),
+            _R: Machine(FD_READ, Side.IDLE, self),
+        }
+        self.jobs: dict[Direction, Job | None] = {_W: None, _R: None}
+        self.exchanges: dict[Direction, Exchange | None] = {_W: None, _R: None}
+        self.timers: dict[Direction, Handle | None] = {_W: None, _R: None}
+        self.to_send = b""  # the write's characters (ETC, auto-LF applied)
+        self.write_report = 0
+        self.position = 0  # characters of to_send already sent
+        self.read_report = 0
+        self.read_data = b""
         self._silence: Handle | None = None
+
+    def side(self, direction: Direction) -> Side:
+        return self.machines[direction].state
 
     def start(self, now: int) -> None:
         assert self.config is not None
@@ -72,76 +90,63 @@ class FullDuplexChannel(Channel):
     def describe(self) -> str:
         assert self.config is not None
         return (
-            f"full-duplex {self.config.baud} {self.config.fmt}, write {self.side['write'].value},"
-            f" read {self.side['read'].value}, buffer {len(self.buffer)}"
+            f"full-duplex {self.config.fmt}, write {self.side(_W).value},"
+            f" read {self.side(_R).value}, buffer {len(self.buffer)}"
         )
 
     @property
     def receiving(self) -> bool:
-        return self.side["read"] is Side.BUSY
+        return self.side(_R) is Side.BUSY
 
     @property
     def transmitting(self) -> bool:
-        return self.side["write"] is Side.BUSY
+        return self.side(_W) is Side.BUSY
 
-    def fire(self, side: str, event: FdInput, now: int) -> None:
-        try:
-            action, target = TRANSITIONS[(self.side[side], event)]
-        except KeyError:
-            raise ProtocolError(
-                f"SCM channel 1 {side}: can't handle {event.value!r}"
-                f" in state {self.side[side].value}"
-            ) from None
-        self.side[side] = target
-        getattr(self, f"_{action}_{side}")(now)
+    def fire(self, side: Direction, event: FdInput, now: int) -> None:
+        self.machines[side].fire(event, now)
         self.host.changed()
-
-    def _noop_write(self, now: int) -> None:
-        pass
-
-    _noop_read = _noop_write
 
     # --- requests -----------------------------------------------------------------
 
     def request(self, exchange: Exchange, job: Job, now: int) -> None:
         if job.writes:
-            self.jobs["write"] = job
-            self.exchanges["write"] = exchange if job.kind is JobKind.WRITE else None
-            self.fire("write", FdInput.START, now)
+            self.jobs[_W] = job
+            self.exchanges[_W] = exchange if job.kind is JobKind.WRITE else None
+            self.fire(_W, FdInput.START, now)
         if job.reads:
-            self.jobs["read"] = job
-            self.exchanges["read"] = exchange
-            self.fire("read", FdInput.START, now)
+            self.jobs[_R] = job
+            self.exchanges[_R] = exchange
+            self.fire(_R, FdInput.START, now)
 
     def abort(self, now: int, write: bool = True, read: bool = True) -> list[Exchange]:
         cancelled = []
-        for side, wanted in (("write", write), ("read", read)):
+        for side, wanted in ((_W, write), (_R, read)):
             exchange = self.exchanges[side]
-            if wanted and self.side[side] is Side.BUSY:
+            if wanted and self.side(side) is Side.BUSY:
                 if exchange is not None:
                     cancelled.append(exchange)
                 self.fire(side, FdInput.ABORT, now)
         return cancelled
 
-    def _timer(self, side: str, at: int) -> None:
+    def _timer(self, side: Direction, at: int) -> None:
         job = self.jobs[side]
         if job is not None and job.timeout_us is not None and self.timers[side] is None:
             self.timers[side] = self.host.call_at(at + job.timeout_us, self._timeout_of(side))
 
-    def _timeout_of(self, side: str) -> Callable[[int], None]:
+    def _timeout_of(self, side: Direction) -> Callable[[int], None]:
         def fired(now: int) -> None:
             self.timers[side] = None
             self.fire(side, FdInput.TIMEOUT, now)
 
         return fired
 
-    def _cancel(self, side: str) -> None:
+    def _cancel(self, side: Direction) -> None:
         handle = self.timers[side]
         if handle is not None:
             handle.cancel()
         self.timers[side] = None
 
-    def _complete(self, side: str, answer: Answer, now: int) -> None:
+    def _complete(self, side: Direction, answer: Answer, now: int) -> None:
         exchange = self.exchanges[side]
         self.exchanges[side] = None
         if exchange is not None:
@@ -150,7 +155,7 @@ class FullDuplexChannel(Channel):
     # --- the write side ----------------------------------------------------------
 
     def _begin_write(self, now: int) -> None:
-        job = self.jobs["write"]
+        job = self.jobs[_W]
         assert job is not None
         self.to_send, self.write_report = self.outgoing(job.chars)
         self.position = 0
@@ -159,33 +164,33 @@ class FullDuplexChannel(Channel):
         if self.to_send:
             self.line.send(self.to_send, now, tag="write")
         else:
-            self.host.call_at(now, lambda t: self.fire("write", FdInput.DONE, t))
+            self.host.call_at(now, lambda t: self.fire(_W, FdInput.DONE, t))
 
     def on_sent(self, value: int, tag: str, now: int) -> None:
-        if tag != "write" or self.side["write"] is not Side.BUSY:
+        if tag != "write" or self.side(_W) is not Side.BUSY:
             return
-        self._timer("write", now - self.line.char_us)  # from the first character sent
+        self._timer(_W, now - self.line.char_us)  # from the first character sent
         self.position += 1
         if self.position == len(self.to_send):
-            self.fire("write", FdInput.DONE, now)
+            self.fire(_W, FdInput.DONE, now)
 
     def _end_write(self, now: int) -> None:
-        self._cancel("write")
-        self._complete("write", Answer(v=self.write_report), now)
+        self._cancel(_W)
+        self._complete(_W, Answer(v=self.write_report), now)
         self._restart_echo(now)
 
     def _time_out_write(self, now: int) -> None:
-        job = self.jobs["write"]
+        job = self.jobs[_W]
         self.line.clear_tx("write")
         fault = AppFault.WRITE_TIMEOUT if job and job.kind is JobKind.WRITE else AppFault.WR_TIMEOUT
         self.host.app_fault(self.index, fault)
-        self._complete("write", Answer(v=V_ERROR), now)
+        self._complete(_W, Answer(v=V_ERROR), now)
         self._restart_echo(now)
 
     def _stop_write(self, now: int) -> None:
-        self._cancel("write")
+        self._cancel(_W)
         self.line.clear_tx("write")
-        self.exchanges["write"] = None
+        self.exchanges[_W] = None
         self._restart_echo(now)
 
     def _restart_echo(self, now: int) -> None:
@@ -198,7 +203,7 @@ class FullDuplexChannel(Channel):
 
     def _echo(self, chars: bytes, now: int) -> None:
         if chars:
-            self.line.send(self.with_auto_lf(chars), now, tag="echo")
+            self.echo(self.with_auto_lf(chars), now, tag="echo")
 
     # --- the buffer (SCM 4.4, 5.2 IWxy,2..4) --------------------------------------
 
@@ -206,7 +211,7 @@ class FullDuplexChannel(Channel):
         assert self.config is not None
         cfg = self.config
         self.last_char = value  # SCM 5.2 IWxy,3: even when the buffer is full
-        writing = self.side["write"] is Side.BUSY
+        writing = self.side(_W) is Side.BUSY
         if cfg.back_space and cfg.rx_echo and value == BS:
             self._back_space(now, writing)
             return
@@ -214,12 +219,22 @@ class FullDuplexChannel(Channel):
         if (not which or cfg.erc.included(which)) and not self._store(value):
             return
         if which:
-            self.ends.append((len(self.buffer), which))
+            self._end_message(which)
         if cfg.rx_echo and not writing:
             self._echo(bytes([value]), now)
             self.echoed = len(self.buffer)
         self._arm_silence(now)
         self._serve(now)
+
+    def _end_message(self, report: int) -> None:
+        # an end character right after another ends no new message: a read takes the
+        # first one and drops the empty one after it, so it is not kept (bounded ends)
+        if not self.ends or self.ends[-1][0] != len(self.buffer):
+            self.ends.append((len(self.buffer), report))
+
+    def overrun(self, now: int) -> None:
+        # SCM 6.3 (TSX SCM 21) 3rd word bit F "overload fault in reception" (manual-notes)
+        self.host.app_fault(self.index, AppFault.OVERLOAD)
 
     def _store(self, value: int) -> bool:
         if len(self.buffer) >= BUFFER_BYTES:
@@ -237,7 +252,7 @@ class FullDuplexChannel(Channel):
         self.buffer.pop()
         self.echoed = min(self.echoed, len(self.buffer))
         if not writing:
-            self.line.send(bytes([BS, SP, BS]), now, tag="echo")
+            self.echo(bytes([BS, SP, BS]), now, tag="echo")
 
     def _arm_silence(self, now: int) -> None:
         assert self.config is not None
@@ -278,12 +293,12 @@ class FullDuplexChannel(Channel):
             self.line.send(bytes([XON]), now, tag="flow", first=True)
         if self.config.dtr_auto:
             self.signals.dtr_auto = 0
-        self._timer("read", now)
+        self._timer(_R, now)
         self._serve(now)
 
     def _serve(self, now: int) -> None:
-        job = self.jobs["read"]
-        if self.side["read"] is not Side.BUSY or job is None:
+        job = self.jobs[_R]
+        if self.side(_R) is not Side.BUSY or job is None:
             return
         if self.ends and self.ends[0][0] <= job.count:
             position, self.read_report = self.ends[0]
@@ -294,18 +309,18 @@ class FullDuplexChannel(Channel):
             self.read_data = self.take(job.count)
         else:
             return
-        self.fire("read", FdInput.DONE, now)
+        self.fire(_R, FdInput.DONE, now)
 
     def _end_read(self, now: int) -> None:
         assert self.config is not None
-        self._cancel("read")
+        self._cancel(_R)
         if self.read_report == 0:
             self._count_reached(now)
         self.overflow = False  # SCM 5.2: IWxy,2 and IWxy,3 reset when a request is processed
         self.last_char = 0
-        exchange = self.exchanges["read"]
+        exchange = self.exchanges[_R]
         capacity = exchange.request.capacity if exchange is not None else 0
-        self._complete("read", Answer(v=self.read_report, data=self.read_data[:capacity]), now)
+        self._complete(_R, Answer(v=self.read_report, data=self.read_data[:capacity]), now)
 
     def _count_reached(self, now: int) -> None:
         assert self.config is not None
@@ -316,22 +331,56 @@ class FullDuplexChannel(Channel):
             self.signals.dtr_auto = 1  # AMB-SCM-22: modem not ready until the next read
 
     def _time_out_read(self, now: int) -> None:
-        job = self.jobs["read"]
+        job = self.jobs[_R]
         fault = AppFault.READ_TIMEOUT if job and job.kind is JobKind.READ else AppFault.WR_TIMEOUT
         self.host.app_fault(self.index, fault)
-        self._complete("read", Answer(v=V_ERROR), now)  # the characters stay in the buffer
+        self._complete(_R, Answer(v=V_ERROR), now)  # the characters stay in the buffer
 
     def _stop_read(self, now: int) -> None:
-        self._cancel("read")
-        self.exchanges["read"] = None
+        self._cancel(_R)
+        self.exchanges[_R] = None
 
     def message_reset(self, now: int) -> None:
         self.clear_buffer()
         self.last_char = 0
 
     def power_off(self) -> None:
-        for side in self.SIDES:
+        for side in Direction:
             self._cancel(side)
         if self._silence is not None:
             self._silence.cancel()
         super().power_off()
+
+
+def _nothing(channel: FullDuplexChannel, now: int) -> None:
+    """A reset of an idle side: nothing to stop."""
+
+
+_C, _I, _S = FullDuplexChannel, FdInput, Side
+
+# SCM 4.4: the transmitter and the reader of a full-duplex channel run side by side,
+# one machine each (DESIGN rule 4)
+FD_WRITE: Table[Side, FdInput] = Table(
+    "SCM full-duplex write",
+    Side,
+    FdInput,
+    {
+        (_S.IDLE, _I.START): (_C._begin_write, _S.BUSY),
+        (_S.IDLE, _I.ABORT): (_nothing, _S.IDLE),
+        (_S.BUSY, _I.DONE): (_C._end_write, _S.IDLE),
+        (_S.BUSY, _I.TIMEOUT): (_C._time_out_write, _S.IDLE),
+        (_S.BUSY, _I.ABORT): (_C._stop_write, _S.IDLE),
+    },
+)
+FD_READ: Table[Side, FdInput] = Table(
+    "SCM full-duplex read",
+    Side,
+    FdInput,
+    {
+        (_S.IDLE, _I.START): (_C._begin_read, _S.BUSY),
+        (_S.IDLE, _I.ABORT): (_nothing, _S.IDLE),
+        (_S.BUSY, _I.DONE): (_C._end_read, _S.IDLE),
+        (_S.BUSY, _I.TIMEOUT): (_C._time_out_read, _S.IDLE),
+        (_S.BUSY, _I.ABORT): (_C._stop_read, _S.IDLE),
+    },
+)

@@ -9,12 +9,13 @@ again 3 more times, then ends the request with a fault.
 from __future__ import annotations
 
 import enum
-from typing import ClassVar
 
 from fieldtwin.clock import Handle
-from fieldtwin.errors import ProtocolError
-from fieldtwin.tsx.scm.channel import BS, SP, AppFault, Channel
-from fieldtwin.tsx.scm.config import ECHO_RETRIES
+from fieldtwin.fsm import Machine, Table
+from fieldtwin.tsx.scm.adaptors import Signals
+from fieldtwin.tsx.scm.channel import BS, SP, AppFault, Channel, Host
+from fieldtwin.tsx.scm.config import ECHO_RETRIES, ChannelConfig
+from fieldtwin.tsx.scm.line import Line
 from fieldtwin.tsx.scm.requests import Job, JobKind
 from fieldtwin.tsx.textblock import V_ERROR, Answer, Exchange
 
@@ -37,43 +38,40 @@ class HdInput(enum.Enum):
     ABORT = "reset"
 
 
-_S, _I = HdState, HdInput
-
-
 class HalfDuplexChannel(Channel):
-    """One channel in half-duplex character-string mode."""
+    """One channel in half-duplex character-string mode; its table is ``HALF_DUPLEX``."""
 
-    TRANSITIONS: ClassVar[dict[tuple[HdState, HdInput], tuple[str, HdState]]] = {
-        (_S.IDLE, _I.WRITE): ("_begin_write", _S.TRANSMITTING),
-        (_S.IDLE, _I.WRITE_READ): ("_begin_write", _S.TRANSMITTING),
-        (_S.IDLE, _I.READ): ("_begin_read", _S.RECEIVING),
-        (_S.IDLE, _I.ABORT): ("_stop", _S.IDLE),
-        (_S.TRANSMITTING, _I.WRITE_DONE): ("_end_write", _S.IDLE),
-        (_S.TRANSMITTING, _I.TURN_AROUND): ("_begin_read", _S.RECEIVING),
-        (_S.TRANSMITTING, _I.TIMEOUT): ("_time_out", _S.IDLE),
-        (_S.TRANSMITTING, _I.ECHO_FAILED): ("_echo_failed", _S.IDLE),
-        (_S.TRANSMITTING, _I.ABORT): ("_stop", _S.IDLE),
-        (_S.RECEIVING, _I.READ_DONE): ("_end_read", _S.IDLE),
-        (_S.RECEIVING, _I.TIMEOUT): ("_time_out", _S.IDLE),
-        (_S.RECEIVING, _I.ABORT): ("_stop", _S.IDLE),
-    }
+    def __init__(
+        self,
+        host: Host,
+        index: int,
+        line: Line,
+        signals: Signals,
+        config: ChannelConfig | None,
+    ) -> None:
+        super().__init__(host, index, line, signals, config)
+        self.machine: Machine[HdState, HdInput, HalfDuplexChannel] = Machine(
+            HALF_DUPLEX, HdState.IDLE, self
+        )
+        self.job: Job | None = None
+        self.exchange: Exchange | None = None
+        self.received = bytearray()  # SCM 4.2: the characters of the reception request
+        self.reception_report = 0  # SCM 4.5: 0 count, 1/2 end character
+        self.to_send = b""  # SCM 4.1: what the transmission sends (ETC, auto-LF applied)
+        self.transmission_report = 0
+        self.position = 0  # characters of to_send already sent (and echoed back)
+        self.tries = 0  # SCM 3.2 transmission echo: failed tries of the present character
+        self.awaiting_echo = 0
+        self.echo_fault = AppFault.NO_ECHO
+        self._timer: Handle | None = None
+        self._echo_timer: Handle | None = None
 
-    state = HdState.IDLE
-    job: Job | None = None
-    exchange: Exchange | None = None
-    _timer: Handle | None = None
-    _echo_timer: Handle | None = None
+    @property
+    def state(self) -> HdState:
+        return self.machine.state
 
     def fire(self, event: HdInput, now: int) -> None:
-        try:
-            action, target = self.TRANSITIONS[(self.state, event)]
-        except KeyError:
-            raise ProtocolError(
-                f"SCM channel {self.index}: can't handle {event.value!r}"
-                f" in state {self.state.value}"
-            ) from None
-        self.state = target
-        getattr(self, action)(now)
+        self.machine.fire(event, now)
         self.host.changed()
 
     @property
@@ -86,7 +84,7 @@ class HalfDuplexChannel(Channel):
 
     def describe(self) -> str:
         assert self.config is not None
-        return f"half-duplex {self.config.baud} {self.config.fmt}, {self.state.value}"
+        return f"half-duplex {self.config.fmt}, {self.state.value}"
 
     # --- requests -----------------------------------------------------------
 
@@ -213,10 +211,10 @@ class HalfDuplexChannel(Channel):
             # SCM 3.2: not stored, the previous character is deleted, BS SP BS sent
             if self.received:
                 self.received.pop()
-                self.line.send(bytes([BS, SP, BS]), now)
+                self.echo(bytes([BS, SP, BS]), now)
             return
         if cfg.rx_echo:
-            self.line.send(self.with_auto_lf(bytes([value])), now)
+            self.echo(self.with_auto_lf(bytes([value])), now)
         which = cfg.erc.match(value)
         if which:
             if cfg.erc.included(which):
@@ -258,5 +256,29 @@ class HalfDuplexChannel(Channel):
 
     def power_off(self) -> None:
         self._cancel_timers()
-        self.state = HdState.IDLE
+        self.machine.state = HdState.IDLE  # SCM 6.2 power break: the request is abandoned
         super().power_off()
+
+
+_S, _I, _C = HdState, HdInput, HalfDuplexChannel
+
+# SCM 6.2 flow-charts: one half-duplex channel (DESIGN rule 4)
+HALF_DUPLEX: Table[HdState, HdInput] = Table(
+    "SCM half-duplex channel",
+    HdState,
+    HdInput,
+    {
+        (_S.IDLE, _I.WRITE): (_C._begin_write, _S.TRANSMITTING),
+        (_S.IDLE, _I.WRITE_READ): (_C._begin_write, _S.TRANSMITTING),
+        (_S.IDLE, _I.READ): (_C._begin_read, _S.RECEIVING),
+        (_S.IDLE, _I.ABORT): (_C._stop, _S.IDLE),
+        (_S.TRANSMITTING, _I.WRITE_DONE): (_C._end_write, _S.IDLE),
+        (_S.TRANSMITTING, _I.TURN_AROUND): (_C._begin_read, _S.RECEIVING),
+        (_S.TRANSMITTING, _I.TIMEOUT): (_C._time_out, _S.IDLE),
+        (_S.TRANSMITTING, _I.ECHO_FAILED): (_C._echo_failed, _S.IDLE),
+        (_S.TRANSMITTING, _I.ABORT): (_C._stop, _S.IDLE),
+        (_S.RECEIVING, _I.READ_DONE): (_C._end_read, _S.IDLE),
+        (_S.RECEIVING, _I.TIMEOUT): (_C._time_out, _S.IDLE),
+        (_S.RECEIVING, _I.ABORT): (_C._stop, _S.IDLE),
+    },
+)

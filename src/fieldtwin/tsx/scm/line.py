@@ -2,79 +2,48 @@
 
 A character takes (1 start + data + parity + stop) bit times on the line (SCM
 3.2 "number of bits, parity, stop bits"); the module's UART offers only the
-eight formats of 3.2.  Characters travel one clock event each: a character
-leaves the transmitter when its last stop bit ends, and a burst that arrives
-from a peer is received character by character at the peer's pace.
+eight formats of 3.2.  The format is the kernel's
+:class:`fieldtwin.charformat.CharFormat` (speed included).  Characters travel
+one clock event each: a character leaves the transmitter when its last stop
+bit ends, and a burst that arrives from a peer is received character by
+character at the peer's pace.
 
 When the peer's format or speed differs from the channel's, the bit stream the
 peer sends is sampled as the module's UART would (middle of each bit), which
 yields the parity and format (framing) errors of SCM 6.3 "reception parity
 fault" / "format fault in reception".
+
+The receiver is bounded (DESIGN rule 14, docs/manual-notes.md "SCM overrun"):
+at most ``RX_BACKLOG`` characters may wait for the wire.  A peer that writes
+faster than the line carries them (a pty or TCP peer is not held back by a
+baud rate) loses what it writes beyond that, as a UART overruns when
+characters come faster than it takes them; ``on_overrun`` tells the channel.
 """
 
 from __future__ import annotations
 
-import enum
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from fieldtwin.charformat import US_PER_S, CharFormat, Parity
 from fieldtwin.clock import Handle
 
 Schedule = Callable[[int, Callable[[int], None]], Handle]  # call_at(time, callback)
 
-
-class Parity(enum.Enum):
-    """SCM 3.2 parity codes: 0 none, 1 odd, 2 even."""
-
-    NONE = 0
-    ODD = 1
-    EVEN = 2
-
-    @property
-    def letter(self) -> str:
-        return {Parity.NONE: "N", Parity.ODD: "O", Parity.EVEN: "E"}[self]
-
-
-@dataclass(frozen=True, slots=True)
-class CharFormat:
-    """A character format: data bits, parity, stop bits."""
-
-    data_bits: int = 8
-    parity: Parity = Parity.NONE
-    stop_bits: int = 1
-
-    @property
-    def bits(self) -> int:
-        """Bits per character on the line: start + data + parity + stop."""
-        return 1 + self.data_bits + (self.parity is not Parity.NONE) + self.stop_bits
-
-    @property
-    def mask(self) -> int:
-        return (1 << self.data_bits) - 1
-
-    def __str__(self) -> str:
-        return f"{self.data_bits}{self.parity.letter}{self.stop_bits}"
-
-
 # SCM 3.2 "Only the eight possibilities listed below are available on each channel"
-ALLOWED_FORMATS = frozenset(
-    {
-        CharFormat(7, Parity.EVEN, 1),
-        CharFormat(7, Parity.ODD, 1),
-        CharFormat(7, Parity.EVEN, 2),
-        CharFormat(7, Parity.ODD, 2),
-        CharFormat(8, Parity.EVEN, 1),
-        CharFormat(8, Parity.ODD, 1),
-        CharFormat(8, Parity.NONE, 1),
-        CharFormat(8, Parity.NONE, 2),
-    }
-)
+ALLOWED_FRAMES = frozenset({"7E1", "7O1", "7E2", "7O2", "8E1", "8O1", "8N1", "8N2"})
+# The most characters a peer may be ahead of the line: what the module counts as
+# received, SCM 5.2 IWxy,4 "between 1 and 256" (a request takes at most 254, 4.2/4.4).
+RX_BACKLOG = 256
+# Echo characters the transmitter may hold: three per character of the backlog
+# (a back-space is echoed BS SP BS, SCM 3.2); more is an echo that cannot keep up.
+ECHO_BACKLOG = 3 * RX_BACKLOG
 
 
-def char_time_us(fmt: CharFormat, baud: float) -> int:
-    """Duration of one character at ``baud`` (never less than 1 us)."""
-    return max(1, round(fmt.bits * 1_000_000 / baud))
+def allowed(fmt: CharFormat) -> bool:
+    """One of the eight formats of SCM 3.2 (any speed)."""
+    return fmt.frame in ALLOWED_FRAMES
 
 
 def parity_bit(value: int, fmt: CharFormat) -> int:
@@ -103,21 +72,22 @@ class RxChar:
 def decode_stream(
     data: bytes,
     sender: CharFormat,
-    sender_baud: float,
     receiver: CharFormat,
-    receiver_baud: float,
     *,
+    sender_baud: float | None = None,
+    receiver_baud: float | None = None,
     invert: bool = False,
 ) -> list[RxChar]:
     """Characters a UART with ``receiver`` settings reads from back-to-back ``sender`` frames.
 
+    The speeds are the formats' own unless given (a half-speed receiver, SCM 5.1 DSRS).
     ``invert``: the reception circuit reads every level inverted (SCM 5.1 SCA2 PSR), the
     idle line included.
     """
     levels = [b ^ invert for value in data for b in frame_bits(value, sender)]
     idle = int(not invert)
-    sbit = 1.0 / sender_baud
-    rbit = 1.0 / receiver_baud
+    sbit = 1.0 / (sender_baud or sender.baud)
+    rbit = 1.0 / (receiver_baud or receiver.baud)
     end = len(levels) * sbit
 
     def level(t: float) -> int:
@@ -139,7 +109,7 @@ def decode_stream(
         stop_sample = start + (receiver.bits - receiver.stop_bits + 0.5) * rbit
         format_error = level(stop_sample) == 0
         done = start + receiver.bits * rbit
-        out.append(RxChar(value, parity_error, format_error, round(done * 1_000_000)))
+        out.append(RxChar(value, parity_error, format_error, round(done * US_PER_S)))
         t = stop_sample
     return out
 
@@ -153,13 +123,16 @@ def _next_low(levels: list[int], sbit: float, t: float) -> float | None:
     return None
 
 
+def _ignore_overrun(lost: int, now: int) -> None:
+    pass
+
+
 class Line:
-    """The UART of one channel: a transmit queue and a receive queue, on the clock."""
+    """The UART of one channel: a transmit queue and a bounded receive queue, on the clock."""
 
     def __init__(self, schedule: Schedule) -> None:
         self._schedule = schedule
-        self.fmt = CharFormat()
-        self.baud = 9600
+        self.fmt = CharFormat(9600, 8, Parity.NONE, 1)
         self.half_speed = False  # SCA3 DSRS (SCM 5.1): half the configured speed
         self.invert_rx = False  # SCA2 PSR not matching the loop (SCM 5.1)
         self.inject_parity = False  # injected faults: every character received in error
@@ -167,7 +140,10 @@ class Line:
         self.send_port: Callable[[bytes], None] | None = None
         self.on_sent: Callable[[int, str, int], None] = lambda value, tag, now: None
         self.on_char: Callable[[RxChar, int], None] = lambda char, now: None
+        self.on_overrun: Callable[[int, int], None] = _ignore_overrun
         self.tx_allowed: Callable[[], bool] = lambda: True
+        self.overruns = 0  # characters lost because they came faster than the line
+        self.echo_dropped = 0  # echo characters the transmitter had no room for
         self._tx: deque[tuple[int, str]] = deque()
         self.in_flight: str | None = None  # tag of the character on the line
         self._tx_handle: Handle | None = None
@@ -176,12 +152,18 @@ class Line:
         self._rx_free = 0
 
     @property
+    def baud(self) -> int:
+        """The configured speed (SCM 3.2)."""
+        return self.fmt.baud
+
+    @property
     def effective_baud(self) -> float:
-        return self.baud / 2 if self.half_speed else self.baud
+        return self.fmt.baud / 2 if self.half_speed else self.fmt.baud
 
     @property
     def char_us(self) -> int:
-        return char_time_us(self.fmt, self.effective_baud)
+        """One character on the line, in whole microseconds (twice as long at half speed)."""
+        return max(1, round(self.fmt.char_time * (2 if self.half_speed else 1)))
 
     # --- transmitter ------------------------------------------------------
 
@@ -194,10 +176,24 @@ class Line:
         return len(self._tx)
 
     def send(
-        self, data: bytes | list[int], now: int, *, tag: str = "", first: bool = False
+        self,
+        data: bytes | list[int],
+        now: int,
+        *,
+        tag: str = "",
+        first: bool = False,
+        limit: int | None = None,
     ) -> None:
-        """Queue characters (``first``: ahead of the queue, e.g. XOFF) and start sending."""
+        """Queue characters (``first``: ahead of the queue, e.g. XOFF) and start sending.
+
+        ``limit``: queue only up to that many characters in all (an echo); the rest is
+        dropped and counted in ``echo_dropped``.
+        """
         items = [(value, tag) for value in data]
+        if limit is not None:
+            room = max(0, limit - len(self._tx))
+            self.echo_dropped += max(0, len(items) - room)
+            items = items[:room]
         if first:
             self._tx.extendleft(reversed(items))
         else:
@@ -232,23 +228,49 @@ class Line:
 
     # --- receiver ---------------------------------------------------------
 
+    @property
+    def backlog(self) -> int:
+        """Characters on their way in (sent by the peer, not yet received)."""
+        return len(self._rx)
+
     def feed(
-        self, data: bytes, now: int, sender: CharFormat | None = None, baud: float | None = None
+        self, data: bytes, now: int, sender: CharFormat | None = None, *, peer_speed: bool = True
     ) -> None:
-        """Bytes from the peer at ``now``: received one by one at the sender's pace."""
-        fmt, speed = sender or self.fmt, baud or self.effective_baud
-        if fmt == self.fmt and speed == self.effective_baud and not self.invert_rx:
-            step = self.char_us
-            chars = [RxChar(v & fmt.mask, offset_us=(i + 1) * step) for i, v in enumerate(data)]
-        else:
-            rx_baud = self.effective_baud
-            chars = decode_stream(data, fmt, speed, self.fmt, rx_baud, invert=self.invert_rx)
+        """Bytes from the peer at ``now``: received one by one at the sender's pace.
+
+        ``sender``: the peer's format (None: the channel's own); ``peer_speed`` False: the
+        peer sends at the line's present speed whatever its format says.  Work and memory
+        are bounded by ``RX_BACKLOG``: what does not fit is lost (an overrun).
+        """
+        room = RX_BACKLOG - len(self._rx)
+        kept = data[: max(0, room)]
+        chars = self._decode(kept, sender, peer_speed)[: max(0, room)]
+        lost = len(data) - len(kept)
         base = max(now, self._rx_free)
         for char in chars:
             self._rx.append((base + char.offset_us, char))
         if self._rx:
             self._rx_free = self._rx[-1][0]
+        if lost:
+            self.overruns += lost
+            self.on_overrun(lost, now)
         self._arm_rx()
+
+    def _decode(self, data: bytes, sender: CharFormat | None, peer_speed: bool) -> list[RxChar]:
+        fmt = sender or self.fmt
+        speed = fmt.baud if peer_speed and sender is not None else self.effective_baud
+        same = fmt.frame == self.fmt.frame and speed == self.effective_baud
+        if same and not self.invert_rx:
+            step = self.char_us
+            return [RxChar(v & fmt.mask, offset_us=(i + 1) * step) for i, v in enumerate(data)]
+        return decode_stream(
+            data,
+            fmt,
+            self.fmt,
+            sender_baud=speed,
+            receiver_baud=self.effective_baud,
+            invert=self.invert_rx,
+        )
 
     def _arm_rx(self) -> None:
         if self._rx and (self._rx_handle is None or not self._rx_handle.active):
@@ -272,3 +294,16 @@ class Line:
         self._tx.clear()
         self._rx.clear()
         self._rx_free = 0
+
+
+__all__ = [
+    "ALLOWED_FRAMES",
+    "ECHO_BACKLOG",
+    "RX_BACKLOG",
+    "CharFormat",
+    "Line",
+    "Parity",
+    "RxChar",
+    "allowed",
+    "decode_stream",
+]

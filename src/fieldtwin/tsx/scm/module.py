@@ -14,6 +14,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any, ClassVar
 
+from fieldtwin.charformat import CharFormat
 from fieldtwin.clock import S
 from fieldtwin.errors import ConfigError
 from fieldtwin.tsx.module import (
@@ -29,13 +30,13 @@ from fieldtwin.tsx.scm import config as cfgmod
 from fieldtwin.tsx.scm import requests as reqmod
 from fieldtwin.tsx.scm.adaptors import Signals
 from fieldtwin.tsx.scm.channel import AppFault, Channel
-from fieldtwin.tsx.scm.endpoints import Port
+from fieldtwin.tsx.scm.endpoints import MemoryPeer, Port
 from fieldtwin.tsx.scm.fullduplex import FullDuplexChannel
 from fieldtwin.tsx.scm.halfduplex import HalfDuplexChannel
 from fieldtwin.tsx.scm.line import Line
 from fieldtwin.tsx.scm.plant import configure_module
 from fieldtwin.tsx.scm.variants import CODES_47_20, Adaptor, Family, Variant
-from fieldtwin.tsx.scm.wiring import ScmWiring
+from fieldtwin.tsx.scm.wiring import Wiring
 from fieldtwin.tsx.textblock import (
     ERR_CANCELLED,
     ERR_MODULE_FAULT,
@@ -78,7 +79,7 @@ HARDWARE_FAULTS = {
 }
 
 
-class ScmModule(ScmWiring, IntelligentModule):
+class ScmModule(IntelligentModule):
     """One module reference of appendix 7.3 (subclassed per reference in ``__init__``)."""
 
     variant: ClassVar[Variant]
@@ -104,7 +105,7 @@ class ScmModule(ScmWiring, IntelligentModule):
         self.signals = [Signals(a) for a in self.adaptors]
         self.configs: list[cfgmod.ChannelConfig | None] = [None, None]
         self.channels: list[Channel] = [self._channel(i, None) for i in (0, 1)]
-        self.ports: list[Port | None] = [None, None]
+        self.wiring = Wiring(self)
         self.pwf = False
         self.cpuf = False  # SCM 7.1 IWxy,1,7: never raised by this twin
         self._powered_before = False
@@ -127,6 +128,75 @@ class ScmModule(ScmWiring, IntelligentModule):
         if config.full_duplex:
             return FullDuplexChannel(self, index, line, signals, config)
         return HalfDuplexChannel(self, index, line, signals, config)
+
+    # --- the wiring (a component: endpoints and adaptor signals) -----------------
+
+    @property
+    def ports(self) -> list[Port | None]:
+        return self.wiring.ports
+
+    def attach(self, channel: int, endpoint: str) -> MemoryPeer | str:
+        """Wire a channel: "memory" returns a MemoryPeer; "pty" the path a peer opens;
+        "tcp://127.0.0.1:0" the listening address; "serial:///dev/..." the device."""
+        return self.wiring.attach(channel, endpoint)
+
+    def attach_memory(self, channel: int) -> MemoryPeer:
+        peer = self.wiring.attach(channel, "memory")
+        assert isinstance(peer, MemoryPeer)
+        return peer
+
+    def detach(self, channel: int) -> None:
+        self.wiring.detach(channel)
+
+    def set_signal(self, channel: int, name: str, level: int) -> None:
+        """An adaptor input signal (CTS, CD, DSR, RI) as the wiring drives it (SCM 5.1)."""
+        self.wiring.set_signal(channel, name, level)
+
+    def set_loop(self, channel: int, loop: str) -> None:
+        """How an SCA2 current loop is wired: "point-to-point" or "multipoint" (SCM 5.1 PSR)."""
+        self.wiring.set_loop(channel, loop)
+
+    def console_input(self, channel: int, text: str) -> None:
+        self.wiring.console_input(channel, text)
+
+    def peer_format(self, channel: int) -> CharFormat:
+        return self.wiring.line(channel).fmt
+
+    # --- status -----------------------------------------------------------------------
+
+    @property
+    def running(self) -> bool:
+        """Always False: the SCM has no Run/Stop mode (SCM 5.2; AMB-SCM-26, IWxy,0,C is
+        an activity flag, ``active``)."""
+        return False
+
+    @property
+    def active(self) -> bool:
+        """IWxy,0,C: a request is being executed by one of the channels (SCM 5.2)."""
+        return bool(self.iw[0] >> ST_RUN & 1)
+
+    def status(self) -> dict[str, str]:
+        """The base lines without a Run/Stop mode the module does not have (SCM 1.2, 5.2)."""
+        lines = super().status()
+        lines.pop("mode", None)
+        return lines
+
+    def endpoint_lines(self) -> list[str]:
+        return self.wiring.endpoint_lines(f"{self.type_name} slot {self.address}")
+
+    def status_details(self) -> dict[str, str]:
+        lines = {"activity": "executing a request" if self.active else "awaiting a request"}
+        for index, channel in enumerate(self.channels):
+            lost = self.lines[index].overruns
+            overrun = f" | {lost} characters lost (overrun)" if lost else ""
+            wiring = self.wiring.describe(index)
+            lines[f"channel {index}"] = (
+                f"{self.adaptors[index].label} | {channel.describe()} | {wiring}"
+                f" | {self.signals[index].describe()}{overrun}"
+            )
+        if self.app_name:
+            lines["application name"] = self.app_name.decode("latin-1").rstrip()
+        return lines
 
     # --- host of the channels -----------------------------------------------------
 
@@ -363,7 +433,7 @@ class ScmModule(ScmWiring, IntelligentModule):
         self.channels[index] = self._channel(index, config)
         if self.state is ModuleState.OPERATIONAL:
             self.channels[index].start(now)
-        self.follow_configuration(index)
+        self.wiring.follow_configuration(index)
         self.changed()
 
     def _read_config(self, index: int) -> Answer:

@@ -1,13 +1,14 @@
-"""What a SCM module's connectors are wired to, and how an operator sees and drives them.
+"""What a SCM module's connectors are wired to, and how an operator drives them.
 
-A mixin of :class:`~fieldtwin.tsx.scm.module.ScmModule`: endpoints (memory, pty,
-serial, TCP), the adaptor input signals (SCM 5.1), the SCA2 current-loop wiring,
-the console's ``input`` command and the status lines.
+A component the module holds (``ScmModule.wiring``), not a mixin: the ports of
+the two channels (memory, pty, serial, TCP), the adaptor input signals
+(SCM 5.1), the SCA2 current-loop wiring and the console's ``input`` command.
+It reaches the module only through :class:`WiringHost`.
 """
 
 from __future__ import annotations
 
-from typing import Any, ClassVar
+from typing import Protocol
 
 from fieldtwin.errors import ConfigError
 from fieldtwin.tsx.module import ModuleContext
@@ -15,93 +16,112 @@ from fieldtwin.tsx.scm.adaptors import Signals
 from fieldtwin.tsx.scm.channel import Channel
 from fieldtwin.tsx.scm.config import ChannelConfig
 from fieldtwin.tsx.scm.endpoints import MemoryPeer, Port, open_real
-from fieldtwin.tsx.scm.line import CharFormat, Line
+from fieldtwin.tsx.scm.line import Line
 from fieldtwin.tsx.scm.variants import Adaptor
 
 
-class ScmWiring:
-    """Endpoints, signals, console and status of the two channels."""
+class WiringHost(Protocol):
+    """What the wiring needs from its module."""
 
-    # provided by ScmModule / IntelligentModule
-    type_name: ClassVar[str]
-    ctx: ModuleContext
-    rack: int
-    slot: int
-    app_name: bytes
-    adaptors: tuple[Adaptor, Adaptor]
-    lines: list[Line]
-    signals: list[Signals]
-    channels: list[Channel]
-    configs: list[ChannelConfig | None]
-    ports: list[Port | None]
+    @property
+    def ctx(self) -> ModuleContext: ...
 
-    def changed(self) -> None:
-        raise NotImplementedError
+    @property
+    def adaptors(self) -> tuple[Adaptor, Adaptor]: ...
+
+    @property
+    def lines(self) -> list[Line]: ...
+
+    @property
+    def signals(self) -> list[Signals]: ...
+
+    @property
+    def channels(self) -> list[Channel]: ...
+
+    @property
+    def configs(self) -> list[ChannelConfig | None]: ...
+
+    def changed(self) -> None: ...
+
+
+class Wiring:
+    """The endpoints and the adaptor signals of the two channels of one module."""
+
+    def __init__(self, host: WiringHost) -> None:
+        self.host = host
+        self.ports: list[Port | None] = [None, None]
 
     # --- endpoints ------------------------------------------------------------------
 
-    def attach(self, channel: int, endpoint: str) -> Any:
+    def attach(self, channel: int, endpoint: str) -> MemoryPeer | str:
         """Wire a channel: "memory" returns a MemoryPeer; "pty" the path a peer opens;
         "tcp://127.0.0.1:0" the listening address; "serial:///dev/..." the device."""
-        line = self._line(channel)
+        line = self.line(channel)
         self.detach(channel)
-        if self.adaptors[channel] is Adaptor.NONE:
+        if self.host.adaptors[channel] is Adaptor.NONE:
             raise ConfigError(f"channel {channel} has no adaptor: nothing to wire")
+        ctx = self.host.ctx
         if endpoint.strip() == "memory":
-            port = Port("memory", line)
-            port.peer = MemoryPeer(self.ctx.clock, line.feed)
+            peer = MemoryPeer(ctx.clock, line)
+            port = Port("memory", line, peer=peer)
             line.send_port = port.send
             self.ports[channel] = port
-            return port.peer
-        if self.ctx.pace is None:
+            return peer
+        if ctx.pace is None:
             raise ConfigError("a real endpoint needs the module to sit in a Plc (its runner)")
-        port = open_real(endpoint, line, self.ctx.pace())
+        port = open_real(endpoint, line, ctx.pace())
         line.send_port = port.send
         self.ports[channel] = port
-        return port.path
-
-    def attach_memory(self, channel: int) -> MemoryPeer:
-        peer = self.attach(channel, "memory")
-        assert isinstance(peer, MemoryPeer)
-        return peer
+        return port.path or port.url
 
     def detach(self, channel: int) -> None:
         port = self.ports[channel]
         if port is not None:
             port.close()
             self.ports[channel] = None
-        self._line(channel).send_port = None
+        self.line(channel).send_port = None
 
     def follow_configuration(self, channel: int) -> None:
         """A host serial port without settings of its own takes the channel's (SCM 3.2)."""
         port = self.ports[channel]
-        config = self.configs[channel]
+        config = self.host.configs[channel]
         if port is not None and config is not None:
-            port.follow(config.fmt, config.baud)
+            port.follow(config.fmt)
 
-    def _line(self, channel: int) -> Line:
+    def line(self, channel: int) -> Line:
         if channel not in (0, 1):
             raise ConfigError(f"SCM channel {channel} does not exist (allowed 0 or 1)")
-        return self.lines[channel]
+        return self.host.lines[channel]
 
-    def peer_format(self, channel: int) -> CharFormat:
-        return self._line(channel).fmt
+    def describe(self, channel: int) -> str:
+        port = self.ports[channel]
+        return port.describe() if port is not None else "not wired"
+
+    def endpoint_lines(self, label: str) -> list[str]:
+        """One line per channel wired to a real endpoint, for `fieldtwin run`."""
+        return [
+            f"listening: {label} channel {index} {port.describe()}"
+            for index, port in enumerate(self.ports)
+            if port is not None and port.url != "memory"
+        ]
 
     # --- adaptor signals (SCM 5.1) ----------------------------------------------------
 
     def set_signal(self, channel: int, name: str, level: int) -> None:
         """An adaptor input signal (CTS, CD, DSR, RI) as the wiring drives it."""
-        self._line(channel)
-        self.signals[channel].set_input(name, level)
-        self.channels[channel].signals_changed(self.ctx.clock.now)
-        self.changed()
+        self.line(channel)
+        self.host.signals[channel].set_input(name, level)
+        self._signals_changed(channel)
 
     def set_loop(self, channel: int, loop: str) -> None:
         """How an SCA2 current loop is wired: "point-to-point" or "multipoint" (SCM 5.1 PSR)."""
-        self._line(channel)
-        self.signals[channel].set_loop(loop)
-        self.channels[channel].signals_changed(self.ctx.clock.now)
-        self.changed()
+        self.line(channel)
+        self.host.signals[channel].set_loop(loop)
+        self._signals_changed(channel)
+
+    def _signals_changed(self, channel: int) -> None:
+        self.host.channels[channel].signals_changed(self.host.ctx.clock.now)
+        self.host.changed()
 
     def console_input(self, channel: int, text: str) -> None:
         name, sep, level = text.partition("=")
@@ -114,29 +134,3 @@ class ScmWiring:
                 " or loop=point-to-point / loop=multipoint (SCA2)"
             )
         self.set_signal(channel, name, int(level))
-
-    # --- status ---------------------------------------------------------------------
-
-    def endpoint_lines(self) -> list[str]:
-        """One line per channel wired to a real endpoint, for `fieldtwin run`."""
-        address = f"{self.slot}" if self.rack == 0 else f"{self.rack}{self.slot}"
-        lines = []
-        for index, port in enumerate(self.ports):
-            if port is not None and port.url != "memory":
-                lines.append(
-                    f"listening: {self.type_name} slot {address} channel {index} {port.describe()}"
-                )
-        return lines
-
-    def status_details(self) -> dict[str, str]:
-        lines = {}
-        for index, channel in enumerate(self.channels):
-            port = self.ports[index]
-            wiring = port.describe() if port is not None else "not wired"
-            lines[f"channel {index}"] = (
-                f"{self.adaptors[index].label} | {channel.describe()} | {wiring}"
-                f" | {self.signals[index].describe()}"
-            )
-        if self.app_name:
-            lines["application name"] = self.app_name.decode("latin-1").rstrip()
-        return lines
