@@ -96,12 +96,12 @@ class Tes:
             self.registers, ram, self.line_faults, self.watch.master_request
         )
         self._drivers: dict[int, DiscreteDriver] = {}
-        self._init_eeprom(slave)
-        self.power_on()
+        self._boot(self._init_eeprom(slave))
 
     # --- EEPROM ------------------------------------------------------------
 
-    def _init_eeprom(self, slave: int | None) -> None:
+    def _init_eeprom(self, slave: int | None) -> dict[str, Value]:
+        """The EEPROM this TES starts with (stored first when new or renumbered)."""
         stored_model = self.store.model_of(self.name)
         if stored_model is not None and stored_model != self.model.name:
             raise ConfigError(
@@ -110,12 +110,14 @@ class Tes:
             )
         if stored_model is None and self.store.readonly:
             raise ConfigError(self.store.no_device(self.name))
-        values = self.eeprom() if stored_model is not None else factory(self.model)
+        stored = self.eeprom() if stored_model is not None else None
+        values = dict(stored) if stored is not None else factory(self.model)
         if slave is not None:  # §3.1.3 / §3.1.4 each port has its own slave number
             key = f"{state.link_key(self.link)}.slave"
             values[key] = parse_value(self.model, key, slave)
-        if stored_model is None or values != self.eeprom():
+        if values != stored:
             self.store.save(self.name, self.model.name, values)
+        return values
 
     def eeprom(self) -> dict[str, Value]:
         """The user settings in the EEPROM (factory values where none were written)."""
@@ -133,10 +135,14 @@ class Tes:
     # --- power (§1) --------------------------------------------------------
 
     def power_on(self) -> None:
+        """24 V on: RAM starts afresh, the MP words are loaded from the EEPROM (§1)."""
+        self._boot(self.eeprom())
+
+    def _boot(self, eeprom: dict[str, Value]) -> None:
         ram, now = self.ram, self.clock.now
         ram.booted_at = now
         # §3.1.2 the Prm jumper gives the factory settings; else the user settings
-        ram.params = factory(self.model) if self.prm_jumper else self.eeprom()
+        ram.params = factory(self.model) if self.prm_jumper else eeprom
         ram.words = mp_image(self.model, ram.params)
         ram.status = state.POWER_ON
         ram.counters = {"rs485": state.LinkCounters(), "rs232": state.LinkCounters()}

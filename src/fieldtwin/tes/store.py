@@ -7,7 +7,8 @@ keeps the previous contents (DESIGN rule 9).
 A store is marked with its own SQLite ``application_id``; a file that is not
 SQLite, or an SQLite database with other tables, is refused with an error
 naming the file, and is never written.  ``readonly=True`` (the read-only
-``tesis`` commands) never creates a file nor writes a row.
+``tesis`` commands) never creates a file nor writes a row.  Without a path
+the store is a plain dictionary (no SQLite: a thousand TES start fast).
 """
 
 from __future__ import annotations
@@ -42,6 +43,10 @@ class ParameterStore:
         self.readonly = readonly and self.path is not None
         self.where = "the in-memory store" if self.path is None else str(self.path)
         self._empty = True  # no tables yet (a new or empty file)
+        self._memory: dict[str, tuple[str, dict[str, Value]]] | None = None
+        if self.path is None:
+            self._memory = {}  # device -> (model, values)
+            return
         try:
             self._db = self._connect()
         except sqlite3.Error as exc:
@@ -53,8 +58,7 @@ class ParameterStore:
             raise
 
     def _connect(self) -> sqlite3.Connection:
-        if self.path is None:
-            return sqlite3.connect(":memory:", isolation_level=None)
+        assert self.path is not None
         if self.path.is_dir():
             raise ConfigError(f"TES parameter store {self.where}: is a directory")
         if self.readonly:
@@ -99,7 +103,8 @@ class ParameterStore:
         return True
 
     def close(self) -> None:
-        self._db.close()
+        if self._memory is None:
+            self._db.close()
 
     def _query(self, sql: str, args: tuple[str, ...] = ()) -> list[tuple[object, ...]]:
         if self._empty and self.readonly:
@@ -111,6 +116,8 @@ class ParameterStore:
 
     def devices(self) -> dict[str, str]:
         """device name -> model name."""
+        if self._memory is not None:
+            return {name: self._memory[name][0] for name in sorted(self._memory)}
         rows = self._query("SELECT name, model FROM device ORDER BY name")
         return {str(name): str(model) for name, model in rows}
 
@@ -130,6 +137,9 @@ class ParameterStore:
         )
 
     def load(self, device: str) -> dict[str, Value]:
+        if self._memory is not None:
+            _, values = self._memory.get(device, ("", {}))
+            return dict(sorted(values.items()))
         rows = self._query(
             "SELECT param, value FROM eeprom WHERE device = ? ORDER BY param", (device,)
         )
@@ -159,6 +169,14 @@ class ParameterStore:
         """
         if self.readonly:
             raise ConfigError(f"TES parameter store {self.where}: opened read-only")
+        if self._memory is not None:
+            written: dict[str, Value] = {}
+            for param, value in values.items():  # all or nothing, like the transaction
+                if before_row is not None:
+                    before_row(param)
+                written[param] = value
+            self._memory[device] = (model, written)
+            return
         db = self._db
         try:
             db.execute("BEGIN IMMEDIATE")
