@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sqlite3
 from pathlib import Path
 
 import pytest
@@ -152,3 +153,31 @@ def test_factory_settings_are_valid_for_every_model(model: str) -> None:
     values = factory(MODELS[model])
     tes = Tes(model)
     assert tes.eeprom() == values
+
+
+def test_a_store_written_before_the_application_id_still_opens(tmp_path: Path) -> None:
+    """Stores of earlier versions (no application id, the two tables) keep working."""
+    old = tmp_path / "old.db"
+    with sqlite3.connect(old) as db:
+        db.executescript(
+            "CREATE TABLE device (name TEXT PRIMARY KEY, model TEXT NOT NULL);"
+            "CREATE TABLE eeprom (device TEXT NOT NULL REFERENCES device(name),"
+            " param TEXT NOT NULL, value TEXT NOT NULL, PRIMARY KEY (device, param));"
+            "INSERT INTO device VALUES ('st', 'TES 32ST');"
+            "INSERT INTO eeprom VALUES ('st', 'rs485.slave', '12');"
+        )
+    assert ParameterStore(old, readonly=True).load("st") == {"rs485.slave": 12}
+    assert Tes("TES 32ST", store=old, name="st").slave == 12
+    (tmp_path / "empty.db").touch()  # what an older `tesis show` left behind
+    assert ParameterStore(tmp_path / "empty.db", readonly=True).devices() == {}
+    assert Tes("TES 32ST", store=tmp_path / "empty.db").slave == 1
+
+
+def test_a_read_only_store_writes_nothing(tmp_path: Path) -> None:
+    Tes("TES 32ST", store=tmp_path / "e.db", name="st")
+    store = ParameterStore(tmp_path / "e.db", readonly=True)
+    with pytest.raises(ConfigError, match=r"e\.db: opened read-only"):
+        store.save("st", "TES 32ST", {})
+    with pytest.raises(ConfigError, match=r"e\.db: no device 'other' \(devices stored: 'st'"):
+        Tes("TES 32ST", store=store, name="other")
+    assert Tes("TES 32ST", store=store, name="st").slave == 1

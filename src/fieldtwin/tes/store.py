@@ -44,11 +44,12 @@ class ParameterStore:
         self.where = "the in-memory store" if self.path is None else str(self.path)
         self._empty = True  # no tables yet (a new or empty file)
         self._memory: dict[str, tuple[str, dict[str, Value]]] | None = None
+        self._connection: sqlite3.Connection | None = None
         if self.path is None:
             self._memory = {}  # device -> (model, values)
             return
         try:
-            self._db = self._connect()
+            self._connection = self._connect()
         except sqlite3.Error as exc:
             raise ConfigError(f"TES parameter store {self.where}: {exc}") from None
         try:
@@ -70,6 +71,11 @@ class ParameterStore:
             uri = f"{self.path.resolve().as_uri()}?mode=ro"
             return sqlite3.connect(uri, uri=True, isolation_level=None)
         return sqlite3.connect(str(self.path), isolation_level=None)
+
+    @property
+    def _db(self) -> sqlite3.Connection:
+        assert self._connection is not None, "an in-memory store has no database"
+        return self._connection
 
     def _check(self) -> None:
         """Refuse a file that is not a fieldtwin store; create the tables in a new one."""
