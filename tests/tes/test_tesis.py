@@ -226,3 +226,15 @@ def test_map_with_a_model_needs_no_store(
     code, out, _ = _run(capsys, "--store", str(tmp_path / "none.db"), "--model", "4EA", "map")
     assert code == 0 and "history[3][119]" in out
     assert not (tmp_path / "none.db").exists()
+
+
+def test_another_model_than_the_only_one_stored_asks_for_a_device(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    db = tmp_path / "eeprom.db"
+    Tes("TES 32ST", store=db, name="pump")
+    code, _, err = _run(capsys, "--store", str(db), "--model", "8EA", "set", "ai0.filter", "16")
+    assert code == 2 and "holds 'pump', a TES 32ST, not a TES 8EA: give --device NAME" in err
+    argv = ["--store", str(db), "--model", "8EA", "--device", "boiler", "set", "ai0.filter", "16"]
+    assert _run(capsys, *argv)[0] == 0
+    assert ParameterStore(db).devices() == {"boiler": "TES 8EA", "pump": "TES 32ST"}

@@ -86,7 +86,8 @@ def fault_spec(model: TesModel, name: str, params: Mapping[str, object]) -> Faul
     if spec is None:
         allowed = [n for n in catalogue if not n.startswith(("short_", "open_"))]
         if model.safety:
-            allowed = [f"short_0..short_{model.digital_inputs - 1}", "open_0..", *allowed]
+            last = model.digital_inputs - 1
+            allowed = [f"short_0..short_{last}", f"open_0..open_{last}", *allowed]
         raise ConfigError(f"{model.name}: unknown fault {name!r} (allowed: {', '.join(allowed)})")
     unknown = sorted(set(params) - set(spec.params))
     if unknown:

@@ -111,6 +111,12 @@ def _open(args: argparse.Namespace, writable: bool) -> Tes:
         found = model_named(model)
     except ConfigError as exc:
         raise ConfigError(f"{store.where}: device {device!r}: {exc}") from None
+    stored = devices.get(device or "")
+    if args.device is None and stored is not None and stored != found.name:
+        raise ConfigError(
+            f"{store.where} holds {device!r}, a {stored}, not a {found.name}:"
+            f" give --device NAME for another TES"
+        )
     return Tes(found, store=store, name=device, prm_jumper=args.prm)
 
 
