@@ -12,14 +12,16 @@ from __future__ import annotations
 
 import functools
 from collections import deque
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
+from typing import Protocol
 
 from fieldtwin.clock import MS
 from fieldtwin.errors import ConfigError
 from fieldtwin.modbus.model import Link
 from fieldtwin.tes import state
+from fieldtwin.tes.digital import DigitalInputs, Wiring
 from fieldtwin.tes.models import TesModel
 
 LATE_MAX_MS = 60_000  # our bound for a late answer (the TES's own delay stops at 2570 ms, §7.2.7)
@@ -173,3 +175,103 @@ class LineFaults:
             self.not_ready_left -= 1
             return True
         return window
+
+
+class PowerSwitch(Protocol):
+    """The 24 V supply of a TES (the Tes itself)."""
+
+    @property
+    def powered(self) -> bool: ...
+
+    def power_on(self) -> None: ...
+
+    def power_off(self) -> None: ...
+
+
+class FaultSurface:
+    """Faults of one TES by name: set, cleared, listed (``Tes.inject_fault`` and co)."""
+
+    def __init__(
+        self,
+        model: TesModel,
+        line: LineFaults,
+        link: Link,
+        di: DigitalInputs,
+        set_wiring: Callable[[int, Wiring], None],
+        power: PowerSwitch,
+    ) -> None:
+        self.model = model
+        self._line = line
+        self._link = link
+        self._di = di
+        self._set_wiring = set_wiring
+        self._power = power
+
+    def names(self) -> Mapping[str, str]:
+        return {name: spec.description for name, spec in fault_catalogue(self.model).items()}
+
+    def inject(self, name: str, on: bool, params: Mapping[str, Param]) -> None:
+        spec = fault_spec(self.model, name, params)
+        if not isinstance(on, bool):
+            raise ConfigError(f"fault {name!r}: {on!r} not allowed (allowed: true, false)")
+        if name.startswith(("short_", "open_")):
+            self._wiring(name, on)
+        elif spec.name == "power_off":
+            if on and self._power.powered:
+                self._power.power_off()
+            elif not on and not self._power.powered:
+                self._power.power_on()
+        elif spec.name == "no_answer":
+            self._line.no_answer = on
+        elif spec.name == "late_answer":
+            self._late(on, params)
+        elif spec.name == "not_ready":
+            self._not_ready(on, params)
+        else:  # bad_crc, broken_character
+            self._line.set_corrupt(state.LineFault(spec.name), on, _count(params), self._link)
+
+    def _wiring(self, name: str, on: bool) -> None:
+        kind, _, index = name.partition("_")
+        wiring = Wiring.SHORT if kind == "short" else Wiring.OPEN
+        i = int(index)
+        if on:
+            self._set_wiring(i, wiring)
+        elif self._di.wiring(i) is wiring:
+            self._set_wiring(i, Wiring.OK)
+
+    def _late(self, on: bool, params: Mapping[str, Param]) -> None:
+        if not on:
+            self._line.late_us = 0
+            return
+        if "ms" not in params:
+            raise ConfigError(f"fault 'late_answer' needs ms = 1..{LATE_MAX_MS}")
+        self._line.late_us = round(number("ms", params["ms"], 1, LATE_MAX_MS, " ms") * MS)
+
+    def _not_ready(self, on: bool, params: Mapping[str, Param]) -> None:
+        window = None
+        if "window_ms" in params:
+            ms = number("window_ms", params["window_ms"], 0, NOT_READY_WINDOW_MAX_MS, " ms")
+            if ms >= NOT_READY_WINDOW_MAX_MS:
+                raise ConfigError(
+                    f"fault parameter window_ms: {ms!r} not allowed (allowed 0..<100 ms)"
+                )
+            window = round(ms * MS)
+        self._line.set_not_ready(on, _count(params), window)
+
+    def active(self) -> dict[str, dict[str, Param]]:
+        out: dict[str, dict[str, Param]] = {}
+        if self.model.safety:
+            for i in range(self.model.digital_inputs):
+                wiring = self._di.wiring(i)
+                if wiring is not Wiring.OK:
+                    out[f"{wiring.value}_{i}"] = {}
+        if not self._power.powered:
+            out["power_off"] = {}
+        out.update(self._line.active())
+        return out
+
+
+def _count(params: Mapping[str, Param]) -> int | None:
+    if "count" not in params:
+        return None
+    return int(number("count", params["count"], 1, COUNT_MAX))

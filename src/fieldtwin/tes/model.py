@@ -33,16 +33,7 @@ from fieldtwin.tes.drivers import DiscreteDriver, DiscreteSource
 from fieldtwin.tes.eeprom import checked, mp_image
 from fieldtwin.tes.execute import SlaveAdapter
 from fieldtwin.tes.fallback import MasterWatch
-from fieldtwin.tes.faults import (
-    COUNT_MAX,
-    LATE_MAX_MS,
-    NOT_READY_WINDOW_MAX_MS,
-    LineFaults,
-    Param,
-    fault_catalogue,
-    fault_spec,
-    number,
-)
+from fieldtwin.tes.faults import FaultSurface, LineFaults, Param
 from fieldtwin.tes.inputs import InputRef, input_names, input_ref, level_note, parse_bool
 from fieldtwin.tes.kinds import Kind
 from fieldtwin.tes.memmap import Register
@@ -94,6 +85,9 @@ class Tes:
         self.watch = MasterWatch(self.model, self.clock, ram, self.do)
         self.slave_adapter = SlaveAdapter(
             self.registers, ram, self.line_faults, self.watch.master_request
+        )
+        self.fault_surface = FaultSurface(
+            self.model, self.line_faults, link, self.di, self.set_wiring, self
         )
         self._drivers: dict[int, DiscreteDriver] = {}
         self._boot(self._init_eeprom(slave))
@@ -407,36 +401,15 @@ class Tes:
 
     def fault_names(self) -> Mapping[str, str]:
         """name -> description of every fault this model accepts (docs/tes.md)."""
-        return {name: spec.description for name, spec in fault_catalogue(self.model).items()}
+        return self.fault_surface.names()
 
     def inject_fault(self, name: str, on: bool, **params: Param) -> None:
         """Set (``on``) or clear a named fault; ConfigError naming what is allowed."""
-        spec = fault_spec(self.model, name, params)
-        if not isinstance(on, bool):
-            raise ConfigError(f"fault {name!r}: {on!r} not allowed (allowed: true, false)")
-        if name.startswith(("short_", "open_")):
-            kind, _, index = name.partition("_")
-            wiring = Wiring.SHORT if kind == "short" else Wiring.OPEN
-            i = int(index)
-            if on:
-                self.set_wiring(i, wiring)
-            elif self.di.wiring(i) is wiring:
-                self.set_wiring(i, Wiring.OK)
-            return
-        _FAULTS[spec.name](self, on, params)
+        self.fault_surface.inject(name, on, params)
 
     def active_faults(self) -> dict[str, dict[str, Param]]:
         """The faults in force, each with its parameters."""
-        out: dict[str, dict[str, Param]] = {}
-        if self.model.safety:
-            for i in range(self.model.digital_inputs):
-                wiring = self.di.wiring(i)
-                if wiring is not Wiring.OK:
-                    out[f"{wiring.value}_{i}"] = {}
-        if not self.ram.powered:
-            out["power_off"] = {}
-        out.update(self.line_faults.active())
-        return out
+        return self.fault_surface.active()
 
     def set_wiring(self, i: int, wiring: Wiring | str) -> None:
         """TES 32ET-S: a short circuit or a broken wire on input ``i`` (§4.1.5)."""
@@ -474,56 +447,3 @@ class Tes:
                 f"line fault {fault!r} not allowed (allowed: bad_crc, broken_character)"
             ) from None
         self.line_faults.queue(kind, count, link)
-
-
-# --- the faults that are not wiring faults -----------------------------------------
-
-
-def _count(params: Mapping[str, Param]) -> int | None:
-    if "count" not in params:
-        return None
-    return int(number("count", params["count"], 1, COUNT_MAX))
-
-
-def _power(tes: Tes, on: bool, params: Mapping[str, Param]) -> None:
-    if on and tes.powered:
-        tes.power_off()
-    elif not on and not tes.powered:
-        tes.power_on()
-
-
-def _no_answer(tes: Tes, on: bool, params: Mapping[str, Param]) -> None:
-    tes.line_faults.no_answer = on
-
-
-def _late_answer(tes: Tes, on: bool, params: Mapping[str, Param]) -> None:
-    if not on:
-        tes.line_faults.late_us = 0
-        return
-    if "ms" not in params:
-        raise ConfigError(f"fault 'late_answer' needs ms = 1..{LATE_MAX_MS}")
-    tes.line_faults.late_us = round(number("ms", params["ms"], 1, LATE_MAX_MS, " ms") * MS)
-
-
-def _corrupt(tes: Tes, on: bool, params: Mapping[str, Param], fault: state.LineFault) -> None:
-    tes.line_faults.set_corrupt(fault, on, _count(params), tes.link)
-
-
-def _not_ready(tes: Tes, on: bool, params: Mapping[str, Param]) -> None:
-    window = None
-    if "window_ms" in params:
-        ms = number("window_ms", params["window_ms"], 0, NOT_READY_WINDOW_MAX_MS, " ms")
-        if ms >= NOT_READY_WINDOW_MAX_MS:
-            raise ConfigError(f"fault parameter window_ms: {ms!r} not allowed (allowed 0..<100 ms)")
-        window = round(ms * MS)
-    tes.line_faults.set_not_ready(on, _count(params), window)
-
-
-_FAULTS: dict[str, Callable[[Tes, bool, Mapping[str, Param]], None]] = {
-    "power_off": _power,
-    "no_answer": _no_answer,
-    "late_answer": _late_answer,
-    "bad_crc": lambda tes, on, p: _corrupt(tes, on, p, state.LineFault.BAD_CRC),
-    "broken_character": lambda tes, on, p: _corrupt(tes, on, p, state.LineFault.BROKEN_CHARACTER),
-    "not_ready": _not_ready,
-}
