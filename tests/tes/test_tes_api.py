@@ -128,3 +128,17 @@ def test_boolean_words_off(word: str) -> None:
 def test_other_words_are_refused_naming_the_token(word: str) -> None:
     with pytest.raises(ConfigError, match=f"x: {word!r} is not on or off"):
         parse_bool(word, "x")
+
+
+def test_words_by_address_or_by_name() -> None:
+    tes = Tes("TES 8EA")
+    tes.set_input("a3", 10.0)
+    tes.advance(1.0)
+    assert tes.peek("analog_input[3]") == tes.peek(0x006) == 1023
+    assert tes.register("rs485.crc_errors").address == 0x04A
+    tes.write("low_threshold[0]", 5)
+    assert tes.read(0x023) == 5
+    with pytest.raises(ConfigError, match=r"no word named 'colour'"):
+        tes.read("colour")
+    with pytest.raises(ConfigError, match=r"word 003h \(analog_input\[0\]\) is read only"):
+        tes.write("analog_input[0]", 1)

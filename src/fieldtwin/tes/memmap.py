@@ -453,3 +453,9 @@ def coherent_from(model: TesModel) -> int:
 def register_table(model: TesModel) -> Mapping[int, Register]:
     """address -> Register of ``model``'s map, read only, shared by every TES of the model."""
     return MappingProxyType({r.address: r for r in memory_map(model)})
+
+
+@functools.cache
+def register_names(model: TesModel) -> Mapping[str, Register]:
+    """name -> Register of ``model``'s map (``"analog_input[3]"``, ``"rs485.crc_errors"``)."""
+    return MappingProxyType({r.name: r for r in memory_map(model)})

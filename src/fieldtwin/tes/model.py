@@ -36,7 +36,7 @@ from fieldtwin.tes.fallback import MasterWatch
 from fieldtwin.tes.faults import FaultSurface, LineFaults, Param
 from fieldtwin.tes.inputs import InputRef, input_names, input_ref, level_note, parse_bool
 from fieldtwin.tes.kinds import Kind
-from fieldtwin.tes.memmap import Register
+from fieldtwin.tes.memmap import Register, register_names
 from fieldtwin.tes.models import Family, TesModel, model_named
 from fieldtwin.tes.outputs import DigitalOutputs
 from fieldtwin.tes.params import Value, factory, parse_value
@@ -258,29 +258,31 @@ class Tes:
 
     # --- words: master read / write, peek ------------------------------------
 
-    def read(self, address: int) -> int:
+    def read(self, address: int | str) -> int:
         """A master read of one word, with every side effect a read on the wire has.
 
         Memorized inputs are restored (§4.1.2), the watchdog is re-armed and the
         Wdg LED stops blinking (AMB-TES-10), an analog model's status bits 0
         and 1 are cleared by the exchange (§6.4.1).  Line faults do not apply.
         """
-        reg = self._register(address)
+        reg = self.register(address)
         return self._exchange(lambda now: self.registers.get(reg, now))
 
-    def peek(self, address: int) -> int:
+    def peek(self, address: int | str) -> int:
         """The word as it stands, without any side effect."""
-        return self.registers.peek(self._register(address), self.clock.now)
+        return self.registers.peek(self.register(address), self.clock.now)
 
-    def peek_word(self, address: int) -> int:
+    def peek_word(self, address: int | str) -> int:
         """Older name of ``peek``."""
         return self.peek(address)
 
-    def write(self, address: int, value: int) -> None:
+    def write(self, address: int | str, value: int) -> None:
         """A master write of one word (fc 06), with a request's side effects (see ``read``)."""
-        reg = self._register(address)
+        reg = self.register(address)
         if not reg.access.writable:
-            raise ConfigError(f"{self.model.name} word {address:03X}h ({reg.name}) is read only")
+            raise ConfigError(
+                f"{self.model.name} word {reg.address:03X}h ({reg.name}) is read only"
+            )
         if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= 0xFFFF:
             raise ConfigError(f"word value {value!r} out of range (allowed 0..65535)")
         self._exchange(lambda now: self.registers.put(reg, value, now))
@@ -296,7 +298,16 @@ class Tes:
         self.slave_adapter.end_exchange()
         return value or 0
 
-    def _register(self, address: int) -> Register:
+    def register(self, address: int | str) -> Register:
+        """The documented word at ``address``, or of that name (``"analog_input[3]"``)."""
+        if isinstance(address, str):
+            reg = register_names(self.model).get(address.strip())
+            if reg is None:
+                raise ConfigError(
+                    f"{self.model.name} has no word named {address!r}"
+                    f" (see `fieldtwin tesis --model {self.model.name!r} map`)"
+                )
+            return reg
         reg = self.registers.table.get(address)
         if reg is None:
             raise ConfigError(f"{self.model.name} has no word at address {address:03X}h")
