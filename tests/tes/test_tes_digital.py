@@ -187,7 +187,7 @@ def test_4_1_7_silence_puts_outputs_in_fallback_and_recovery() -> None:
     tes.advance(0.001)
     # AMB-TES-11 (command AND mask) OR mask: outputs 4..7 unchanged, 0 forced on, 1..3 off
     assert tes.peek_word(0x007) == 0x00F1
-    assert tes.leds["Wdg"] == "blinking"
+    assert tes.leds["Wdg"] == "blink"
     assert quick_status(tes) == 0x02  # bit 1 set by TES
     assert tes.leds["Wdg"] == "off"  # the master is back
     write_word(tes, 0x00D, 0x000F)

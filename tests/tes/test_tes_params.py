@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import sqlite3
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from fieldtwin.errors import ConfigError
 from fieldtwin.modbus.model import Link
@@ -152,3 +155,68 @@ def test_factory_settings_are_valid_for_every_model(model: str) -> None:
     values = factory(MODELS[model])
     tes = Tes(model)
     assert tes.eeprom() == values
+
+
+def test_a_store_written_before_the_application_id_still_opens(tmp_path: Path) -> None:
+    """Stores of earlier versions (no application id, the two tables) keep working."""
+    old = tmp_path / "old.db"
+    with sqlite3.connect(old) as db:
+        db.executescript(
+            "CREATE TABLE device (name TEXT PRIMARY KEY, model TEXT NOT NULL);"
+            "CREATE TABLE eeprom (device TEXT NOT NULL REFERENCES device(name),"
+            " param TEXT NOT NULL, value TEXT NOT NULL, PRIMARY KEY (device, param));"
+            "INSERT INTO device VALUES ('st', 'TES 32ST');"
+            "INSERT INTO eeprom VALUES ('st', 'rs485.slave', '12');"
+        )
+    assert ParameterStore(old, readonly=True).load("st") == {"rs485.slave": 12}
+    assert Tes("TES 32ST", store=old, name="st").slave == 12
+    (tmp_path / "empty.db").touch()  # what an older `tesis show` left behind
+    assert ParameterStore(tmp_path / "empty.db", readonly=True).devices() == {}
+    assert Tes("TES 32ST", store=tmp_path / "empty.db").slave == 1
+
+
+def test_a_read_only_store_writes_nothing(tmp_path: Path) -> None:
+    Tes("TES 32ST", store=tmp_path / "e.db", name="st")
+    store = ParameterStore(tmp_path / "e.db", readonly=True)
+    with pytest.raises(ConfigError, match=r"e\.db: opened read-only"):
+        store.save("st", "TES 32ST", {})
+    with pytest.raises(ConfigError, match=r"e\.db: no device 'other' \(devices stored: 'st'"):
+        Tes("TES 32ST", store=store, name="other")
+    assert Tes("TES 32ST", store=store, name="st").slave == 1
+
+
+@settings(
+    max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(value=st.text(max_size=12), param=st.sampled_from(["ai0.filter", "rs485.slave", "bogus"]))
+def test_any_stored_value_gives_a_tes_or_an_error_naming_the_store(
+    tmp_path: Path, value: str, param: str
+) -> None:
+    """Issue 10 item 6: whatever a store row holds, a clear error and never a traceback."""
+    db = tmp_path / "p.db"
+    db.unlink(missing_ok=True)
+    Tes("TES 8EA", store=db, name="t")
+    with sqlite3.connect(db) as conn:
+        conn.execute("INSERT OR REPLACE INTO eeprom VALUES ('t', ?, ?)", (param, value))
+    try:
+        Tes("TES 8EA", store=db, name="t")
+    except ConfigError as exc:
+        assert str(db) in str(exc)
+
+
+@pytest.mark.parametrize(
+    "script",
+    [
+        "CREATE TABLE device (name TEXT, colour TEXT); CREATE TABLE eeprom (a, b, c);",
+        "CREATE TABLE device (name TEXT PRIMARY KEY, model TEXT NOT NULL);"
+        "CREATE TABLE eeprom (device TEXT, param TEXT, value TEXT); CREATE TABLE extra (x);",
+        "PRAGMA application_id = 42;",
+    ],
+)
+def test_a_database_that_is_not_a_store_is_refused(tmp_path: Path, script: str) -> None:
+    db = tmp_path / "x.db"
+    with sqlite3.connect(db) as conn:
+        conn.executescript(script)
+    for readonly in (False, True):
+        with pytest.raises(ConfigError, match=rf"{db}: not a fieldtwin TES store"):
+            ParameterStore(db, readonly=readonly)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sqlite3
 from pathlib import Path
 from typing import Any
 
@@ -176,3 +177,57 @@ def test_3_1_4_an_rs232_line_takes_the_rs232_format(tmp_path: Path) -> None:
     )  # fmt: skip
     with pytest.raises(ConfigError, match=r"rs232\.baud / rs232\.parity"):
         line_settings(parse_endpoint("pty?baud=9600&parity=E"), [tes], Link.RS232)
+
+
+@pytest.mark.parametrize(
+    ("endpoint", "message"),
+    [
+        ("pty?baud=38400&parity=E&data=7", r"data=7 not allowed: a TES port has 8 data bits"),
+        ("serial:///dev/ttyUSB0?baud=38400&parity=E&stop=2", r"stop=2 not allowed"),
+    ],
+)
+def test_3_1_3_eight_data_bits_and_one_stop_bit_are_fixed(
+    tmp_path: Path, endpoint: str, message: str
+) -> None:
+    """Issue 10 item 10: refused like a wrong speed or parity."""
+    table = {"model": "TES 32EST", "endpoint": endpoint}
+    with pytest.raises(ConfigError, match=rf"^plant\.toml: tes\[0\]\.endpoint: {message}"):
+        _build(tmp_path, table)
+    assert len(_build(tmp_path, {**table, "endpoint": "pty?baud=38400&parity=E&data=8&stop=1"}))
+
+
+def test_a_foreign_sqlite_store_is_refused_and_left_alone(tmp_path: Path) -> None:
+    """Issue 10 items 6 and 7: a clear error naming the file, never a traceback."""
+    foreign = tmp_path / "shop.db"
+    with sqlite3.connect(foreign) as db:
+        db.execute("CREATE TABLE orders (id INTEGER)")
+    before = foreign.read_bytes()
+    table = {"model": "TES 8EA", "endpoint": "pty", "store": "shop.db"}
+    with pytest.raises(
+        ConfigError,
+        match=r"^plant\.toml: tes\[0\]: TES parameter store .*shop\.db: not a fieldtwin",
+    ):
+        _build(tmp_path, table)
+    assert foreign.read_bytes() == before
+    (tmp_path / "notes.db").write_text("not a database\n")
+    with pytest.raises(ConfigError, match=r"notes\.db: not a fieldtwin TES store"):
+        _build(tmp_path, {**table, "store": "notes.db"})
+
+
+def test_a_store_value_that_is_not_json_is_named(tmp_path: Path) -> None:
+    Tes("TES 8EA", store=tmp_path / "e.db", name="boiler")
+    with sqlite3.connect(tmp_path / "e.db") as db:
+        db.execute("UPDATE eeprom SET value = '{oops' WHERE param = 'ai0.filter'")
+    table = {"model": "TES 8EA", "endpoint": "pty", "store": "e.db", "name": "boiler"}
+    with pytest.raises(
+        ConfigError,
+        match=r"e\.db: device 'boiler' parameter 'ai0\.filter': '\{oops' is not a JSON value",
+    ):
+        _build(tmp_path, table)
+
+
+def test_plant_level_beyond_the_span_saturates(tmp_path: Path) -> None:
+    """Issue 10 item 13 through the API the plant layer calls: the note says so."""
+    (tes,) = _build(tmp_path, {"model": "TES 8EA", "endpoint": "pty", "inputs": {"a0": 15.0}})
+    tes.advance(1.0)
+    assert tes.peek(0x003) == 1023

@@ -1,80 +1,63 @@
-"""Reading and writing the words of a TES memory map (§6), by register kind.
+"""The register file of one TES: the words of its memory map (§6), by register kind.
 
-``RegisterFile`` is the half of :class:`fieldtwin.tes.model.Tes` that turns a
-documented word (a :class:`Register`) into behaviour.  ``peek`` reads without
-side effects; ``get`` is a master read (it restores memorized changes, §4.1.2).
+``RegisterFile`` turns a documented word (a :class:`Register`) into behaviour:
+``peek`` reads without side effects, ``get`` is a master read (it restores
+memorized changes, §4.1.2), ``put`` a master write of a checked writable word.
+It reads and writes the TES's RAM (:class:`fieldtwin.tes.state.Ram`) and its
+I/O components, all given to ``__init__``.  Every :class:`Kind` has a reader
+and every writable kind a writer, in two tables checked complete at import.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 
+from fieldtwin.errors import ProtocolError
 from fieldtwin.tes import state
 from fieldtwin.tes.analog import AnalogInputs
 from fieldtwin.tes.digital import DigitalInputs, Wiring
-from fieldtwin.tes.memmap import Register
+from fieldtwin.tes.kinds import PAIRS, PARAMETERS, Kind
+from fieldtwin.tes.memmap import Register, register_table
 from fieldtwin.tes.models import Family, TesModel
 from fieldtwin.tes.outputs import DigitalOutputs
-from fieldtwin.tes.params import Value
 
-_PAIRS = ("counter_rise", "counter_fall", "duration_1", "duration_0", "cumulated_1", "cumulated_0")
+ParameterHook = Callable[[Kind, int], None]
 
 
 class RegisterFile:
-    model: TesModel
-    params: dict[str, Value]
-    words: dict[int, int]  # MP words and other plain RAM words
-    di: DigitalInputs
-    do: DigitalOutputs
-    ai: AnalogInputs
-    ao_fallback: int  # bit k: analog output k in fallback (§6.4.4 bit 1)
-    status: int
-    counters: dict[str, state.LinkCounters]
+    """The memory map of one TES over its RAM and I/O components."""
+
+    def __init__(
+        self,
+        model: TesModel,
+        ram: state.Ram,
+        di: DigitalInputs,
+        do: DigitalOutputs,
+        ai: AnalogInputs,
+        on_parameter_write: ParameterHook,
+    ) -> None:
+        self.model = model
+        self.table: Mapping[int, Register] = register_table(model)  # shared per model
+        self.ram = ram
+        self.di = di
+        self.do = do
+        self.ai = ai
+        self._on_parameter_write = on_parameter_write
 
     # --- reads -------------------------------------------------------------
 
     def peek(self, reg: Register, now: int) -> int:
-        kind, i = reg.kind, reg.index
-        if kind in _PAIRS:
-            return self._pair(kind, i, now)
-        if kind in ("memorized", "filtered", "direct"):
-            return self.di.bits(kind, i)
-        reader = self._readers().get(kind)
-        if reader is not None:
-            return reader(i, now) & 0xFFFF
-        return self.words.get(reg.address, 0)
+        """The word as it stands: no side effect."""
+        return _READERS[reg.kind](self, reg, now) & 0xFFFF
 
     def get(self, reg: Register, now: int) -> int:
-        if reg.kind == "memorized":
+        """A master read of the word."""
+        if reg.kind is Kind.MEMORIZED:
             self.di.restore_memorized(reg.index)  # AMB-TES-12: shows in this reply
         return self.peek(reg, now)
 
-    def _readers(self) -> Mapping[str, Callable[[int, int], int]]:
-        table: Mapping[str, Callable[[int, int], int]] | None = getattr(self, "_reader_table", None)
-        if table is None:
-            table = self._reader_table = self._make_readers()
-        return table
-
-    def _make_readers(self) -> dict[str, Callable[[int, int], int]]:
-        return {
-            "status": lambda i, now: self.status_word(),
-            "zero": lambda i, now: 0,
-            "outputs": lambda i, now: self.do.mask(now) >> (16 * i),
-            "blink_select": lambda i, now: self.do.blink_select >> (16 * i),
-            "command": self._command_word,
-            "diag_rs485": lambda i, now: self.counters["rs485"].values[i],
-            "diag_rs232": lambda i, now: self.counters["rs232"].values[i],
-            "sc": lambda i, now: self._wiring_bits(Wiring.SHORT, i),
-            "oc": lambda i, now: self._wiring_bits(Wiring.OPEN, i),
-            "fault": lambda i, now: self._wiring_bits(None, i),
-            "analog_input": self._analog_input,
-            "channel_state": self._channel_state,
-            "direct_io": lambda i, now: self.di.bits("direct", 0) | (self.do.mask(now) << 8),
-            "history": lambda i, now: self.ai.history(i // 120, i % 120),
-        }
-
     def status_word(self) -> int:
-        word = self.status
+        word = self.ram.status
         if self.model.digital_inputs and self.di.changes_pending:
             word |= state.MEMORIZED  # §6.2.1 bit 3, reset by TES once all are read
         if self.model.is_analog:
@@ -83,21 +66,21 @@ class RegisterFile:
             word |= state.HIGH_ALARM if any(ch.high for ch in channels) else 0
         return word
 
-    def _command_word(self, i: int, now: int) -> int:
+    def command_word(self, i: int) -> int:
         if self.model.is_analog:  # §6.4.5 blinking choice bits 11-08, states bits 03-00
             return (self.do.blink_select << 8) | self.do.command
         return self.do.command >> (16 * i)
 
-    def _pair(self, kind: str, index: int, now: int) -> int:
+    def pair(self, kind: Kind, index: int, now: int) -> int:
         i, low = divmod(index, 2)
         if i >= self.model.digital_inputs:
             return 0  # AMB-TES-13: inputs the model does not have read 0
-        value = self.di.value32(kind, i, now)
+        value = self.di.value32(kind.value, i, now)
         return value & 0xFFFF if low else value >> 16
 
-    def _wiring_bits(self, wiring: Wiring | None, word: int) -> int:
+    def wiring_bits(self, wiring: Wiring | None, word: int) -> int:
         """§6.2.7 SC / OC / default words; only inputs wired in security mode report."""
-        connection = self.words.get(0x1AB + word, 0)
+        connection = self.ram.word(0x1AB + word)
         out = 0
         for bit in range(16):
             i = 16 * word + bit  # AMB-TES-23: bit 0 = E1 = input No 0
@@ -107,14 +90,14 @@ class RegisterFile:
         return out
 
     def safety_default(self) -> bool:
-        return any(self._wiring_bits(None, w) for w in (0, 1))
+        return self.model.safety and any(self.wiring_bits(None, w) for w in (0, 1))
 
-    def _analog_input(self, k: int, now: int) -> int:
+    def analog_input(self, k: int) -> int:
         ch = self.ai.channels.get(k)
         return 0 if ch is None else ch.value & 0xFFFF
 
-    def _channel_state(self, k: int, now: int) -> int:
-        word = 0x02 if (self.ao_fallback >> k) & 1 else 0  # §6.4.4 bit 1
+    def channel_state(self, k: int) -> int:
+        word = 0x02 if (self.ram.ao_fallback >> k) & 1 else 0  # §6.4.4 bit 1
         ch = self.ai.channels.get(k)
         if ch is not None:
             word |= (0x10 if ch.low else 0) | (0x20 if ch.high else 0)  # bits 4 / 5
@@ -124,45 +107,114 @@ class RegisterFile:
 
     def put(self, reg: Register, value: int, now: int) -> None:
         """A master write of an already checked writable word."""
-        kind, i = reg.kind, reg.index
-        if kind in _PAIRS:
-            self._put_pair(kind, i, value, now)
-        elif kind == "status":
-            self.status &= value | ~state.MASTER_RESETS[self.model.family]
-        elif kind == "blink_select":
-            self.do.blink_select = _splice(self.do.blink_select, i, value)
-        elif kind == "command":
-            self._put_command(i, value)
-        elif kind in ("diag_rs485", "diag_rs232"):
-            self.counters[kind[5:]].values[i] = value
-        elif kind == "analog_output":
-            self.words[reg.address] = value
-            self.ao_fallback &= ~(1 << i)  # a fresh command ends the fallback position
-        else:
-            self.words[reg.address] = value
-            self.after_parameter_write(kind, now)
+        writer = _WRITERS.get(reg.kind)
+        if writer is None or not reg.access.writable:
+            raise ProtocolError(
+                f"{self.model.name} word {reg.address:03X}h ({reg.name}) is read only"
+            )
+        writer(self, reg, value, now)
 
-    def _put_command(self, i: int, value: int) -> None:
+    def put_command(self, i: int, value: int) -> None:
+        do = self.do
         if self.model.is_analog:
-            self.do.blink_select, self.do.command = (value >> 8) & 0xF, value & 0xF
+            do.blink_select, do.command = (value >> 8) & 0xF, value & 0xF
         else:
-            self.do.command = _splice(self.do.command, i, value)
+            do.command = _splice(do.command, i, value)
         if self.model.family is Family.DIGITAL_INPUTS:
-            self.words[0x00D] = self.do.command & 0xFFFF
+            self.ram.words[0x00D] = do.command & 0xFFFF
 
-    def _put_pair(self, kind: str, index: int, value: int, now: int) -> None:
+    def put_pair(self, kind: Kind, index: int, value: int, now: int) -> None:
         i, low = divmod(index, 2)
         if i >= self.model.digital_inputs:
             return
-        old = self.di.value32(kind, i, now)
+        old = self.di.value32(kind.value, i, now)
         new = (old & 0xFFFF0000) | value if low else (value << 16) | (old & 0xFFFF)
-        self.di.set_value32(kind, i, new, now)
+        self.di.set_value32(kind.value, i, new, now)
 
-    def after_parameter_write(self, kind: str, now: int) -> None:
-        raise NotImplementedError
+    def put_parameter(self, reg: Register, value: int, now: int) -> None:
+        self.ram.words[reg.address] = value
+        self._on_parameter_write(reg.kind, now)
 
 
 def _splice(mask: int, word: int, value: int) -> int:
     """Replace 16-bit word ``word`` of a 32-bit mask."""
     shift = 16 * word
     return (mask & ~(0xFFFF << shift)) | (value << shift)
+
+
+# --- the kind tables ---------------------------------------------------------
+
+Reader = Callable[[RegisterFile, Register, int], int]
+Writer = Callable[[RegisterFile, Register, int, int], None]
+
+
+def _word(rf: RegisterFile, reg: Register, now: int) -> int:
+    return rf.ram.word(reg.address)
+
+
+def _pair(rf: RegisterFile, reg: Register, now: int) -> int:
+    return rf.pair(reg.kind, reg.index, now)
+
+
+def _bits(rf: RegisterFile, reg: Register, now: int) -> int:
+    return rf.di.bits(reg.kind.value, reg.index)  # direct, filtered or memorized
+
+
+_READERS: dict[Kind, Reader] = {
+    Kind.STATUS: lambda rf, reg, now: rf.status_word(),
+    Kind.MEMORIZED: _bits,
+    Kind.FILTERED: _bits,
+    Kind.DIRECT: _bits,
+    Kind.OUTPUTS: lambda rf, reg, now: rf.do.mask(now) >> (16 * reg.index),
+    Kind.ZERO: lambda rf, reg, now: 0,
+    Kind.BLINK_SELECT: lambda rf, reg, now: rf.do.blink_select >> (16 * reg.index),
+    Kind.COMMAND: lambda rf, reg, now: rf.command_word(reg.index),
+    Kind.DIRECT_IO: lambda rf, reg, now: rf.di.bits("direct", 0) | (rf.do.mask(now) << 8),
+    Kind.ANALOG_INPUT: lambda rf, reg, now: rf.analog_input(reg.index),
+    Kind.CHANNEL_STATE: lambda rf, reg, now: rf.channel_state(reg.index),
+    Kind.ANALOG_OUTPUT: _word,
+    Kind.HISTORY: lambda rf, reg, now: rf.ai.history(reg.index // 120, reg.index % 120),
+    Kind.DIAG_RS485: lambda rf, reg, now: rf.ram.counters["rs485"].values[reg.index],
+    Kind.DIAG_RS232: lambda rf, reg, now: rf.ram.counters["rs232"].values[reg.index],
+    Kind.SC: lambda rf, reg, now: rf.wiring_bits(Wiring.SHORT, reg.index),
+    Kind.OC: lambda rf, reg, now: rf.wiring_bits(Wiring.OPEN, reg.index),
+    Kind.FAULT: lambda rf, reg, now: rf.wiring_bits(None, reg.index),
+    **{kind: _pair for kind in PAIRS},
+    **{kind: _word for kind in PARAMETERS},
+}
+
+
+def _put_status(rf: RegisterFile, reg: Register, value: int, now: int) -> None:
+    rf.ram.status &= value | ~state.MASTER_RESETS[rf.model.family]
+
+
+def _put_blink_select(rf: RegisterFile, reg: Register, value: int, now: int) -> None:
+    rf.do.blink_select = _splice(rf.do.blink_select, reg.index, value)
+
+
+def _put_diag(rf: RegisterFile, reg: Register, value: int, now: int) -> None:
+    rf.ram.counters[reg.kind.value[5:]].values[reg.index] = value
+
+
+def _put_analog_output(rf: RegisterFile, reg: Register, value: int, now: int) -> None:
+    rf.ram.words[reg.address] = value
+    rf.ram.ao_fallback &= ~(1 << reg.index)  # a fresh command ends the fallback position
+
+
+_WRITERS: dict[Kind, Writer] = {
+    Kind.STATUS: _put_status,
+    Kind.BLINK_SELECT: _put_blink_select,
+    Kind.COMMAND: lambda rf, reg, value, now: rf.put_command(reg.index, value),
+    Kind.DIAG_RS485: _put_diag,
+    Kind.DIAG_RS232: _put_diag,
+    Kind.ANALOG_OUTPUT: _put_analog_output,
+    **{
+        kind: lambda rf, reg, value, now: rf.put_pair(reg.kind, reg.index, value, now)
+        for kind in PAIRS
+    },
+    **{kind: RegisterFile.put_parameter for kind in PARAMETERS},
+}
+
+_missing = set(Kind) - set(_READERS)
+if _missing:  # pragma: no cover - a programming error caught at import
+    raise ImportError(f"TES register kinds without a reader: {sorted(k.value for k in _missing)}")

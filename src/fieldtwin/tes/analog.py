@@ -121,7 +121,8 @@ class AnalogInputs:
     def _points(self, ch: _Channel, now: int) -> float:
         """Electrical value -> 0..1023 points (§4.2.4), corrected (§4.2.5)."""
         full = self._model.analog_range.full_scale
-        raw = max(0, min(POINTS_MAX, round_half_up(self.level(ch.number, now) / full * POINTS_MAX)))
+        level = min(max(self.level(ch.number, now), 0.0), full)  # the converter saturates
+        raw = round_half_up(level / full * POINTS_MAX)
         params = self._params()
         zero, top = params[f"ai{ch.number}.corr_zero"], params[f"ai{ch.number}.corr_full"]
         assert isinstance(zero, int) and isinstance(top, int)

@@ -5,13 +5,17 @@ Bit addresses are word x 16 + bit (§7.1.2); fc 04 reads the same memory as 03
 ignored (AMB-TES-29).  Exception 1: unknown function, 2: a bad address or
 quantity (AMB-TES-01), 4: "slave not ready" in the 32-bit area (§6.2.3.2,
 §6.4.13; AMB-TES-28).
+
+``SlaveAdapter`` is the Modbus side of a TES: it owns nothing but what it is
+given (the register file, the RAM, the line faults and the TES's
+``master_request``), so a master read from Python (``Tes.read``) and one from
+the wire take the same path.
 """
 
 from __future__ import annotations
 
-from collections import deque
+from collections.abc import Callable
 
-from fieldtwin.errors import ConfigError
 from fieldtwin.modbus.model import (
     NO_REPLY,
     ExceptionCode,
@@ -26,65 +30,57 @@ from fieldtwin.modbus.model import (
     WriteWords,
 )
 from fieldtwin.tes import state
+from fieldtwin.tes.access import RegisterFile
 from fieldtwin.tes.digital import TICK
+from fieldtwin.tes.faults import LineFaults
 from fieldtwin.tes.memmap import Register, coherent_from
-from fieldtwin.tes.models import TesModel
 
 NOT_READY = ExceptionCode.SLAVE_DEVICE_FAILURE  # code 4, "slave not ready"
 BAD_ADDRESS = ExceptionCode.ILLEGAL_DATA_ADDRESS
 _READS = (ReadBits, ReadWords, ReadExceptionStatus)
 
 
-class ModbusSlave:
-    model: TesModel
-    registers: dict[int, Register]
-    counters: dict[str, state.LinkCounters]
-    status: int
-    powered: bool
-    booted_at: int
+class SlaveAdapter:
+    """Executes decoded Modbus requests against one TES's register file."""
 
-    def init_slave(self) -> None:
-        self.not_ready_window_us = (
-            0  # each 100 ms the TES refreshes its 32-bit buffers for this long
-        )
-        self._not_ready_left = 0
-        self._line_faults: dict[str, deque[state.LineFault]] = {"rs485": deque(), "rs232": deque()}
-
-    # --- stubs the register file provides ------------------------------------
-
-    def get(self, reg: Register, now: int) -> int:
-        raise NotImplementedError
-
-    def peek(self, reg: Register, now: int) -> int:
-        raise NotImplementedError
-
-    def put(self, reg: Register, value: int, now: int) -> None:
-        raise NotImplementedError
-
-    def status_word(self) -> int:
-        raise NotImplementedError
-
-    def master_request(self, link: Link, now: int) -> None:
-        raise NotImplementedError
+    def __init__(
+        self,
+        registers: RegisterFile,
+        ram: state.Ram,
+        faults: LineFaults,
+        master_request: Callable[[Link, int], None],
+    ) -> None:
+        self.registers = registers
+        self.model = registers.model
+        self._ram = ram
+        self._faults = faults
+        self._master_request = master_request
+        self._coherent_from = coherent_from(self.model)
 
     # --- SlaveDevice -------------------------------------------------------
 
     def execute(self, request: Request, link: Link, now: int, broadcast: bool) -> Result:
         """Carry out one request; None for a write that worked or a broadcast."""
-        if not self.powered:
-            return NO_REPLY  # a TES without 24 V does not answer
-        self.master_request(link, now)
+        if not self._ram.powered or self._faults.no_answer:
+            return NO_REPLY  # a TES without 24 V (or deaf) does not answer
+        self.begin_exchange(link, now)
         if broadcast and isinstance(request, _READS):
             result: Result = None
         else:
             result = self._run(request, link, now)
-        if self.model.is_analog:
-            self.status &= ~(state.POWER_ON | state.FALLBACK)  # §6.4.1 first exchange
+        self.end_exchange()
         return None if broadcast else result
+
+    def begin_exchange(self, link: Link, now: int) -> None:
+        self._master_request(link, now)
+
+    def end_exchange(self) -> None:
+        if self.model.is_analog:
+            self._ram.status &= ~(state.POWER_ON | state.FALLBACK)  # §6.4.1 first exchange
 
     def _run(self, request: Request, link: Link, now: int) -> Result:
         if isinstance(request, ReadExceptionStatus):
-            return self.status_word() & 0xFF  # §7.2.6 the 8 low bits of the status word
+            return self.registers.status_word() & 0xFF  # §7.2.6 the 8 low bits of the status word
         if isinstance(request, ReadWords):
             return self._read_words(request, link, now)
         if isinstance(request, ReadBits):
@@ -100,21 +96,20 @@ class ModbusSlave:
     def _span(self, first: int, count: int, limit: int, writing: bool) -> list[Register] | None:
         if not 1 <= count <= limit:
             return None
-        regs = [self.registers.get(a) for a in range(first, first + count)]
+        regs = [self.registers.table.get(a) for a in range(first, first + count)]
         if any(r is None or (writing and not r.access.writable) for r in regs):
             return None
         return [r for r in regs if r is not None]
 
     def _busy(self, regs: list[Register], link: Link, now: int) -> bool:
-        if regs[-1].address < coherent_from(self.model):
+        if regs[-1].address < self._coherent_from:
             return False
-        window = (
-            self.not_ready_window_us and (now - self.booted_at) % TICK < self.not_ready_window_us
-        )
-        if not (self._not_ready_left or window):
+        faults = self._faults
+        window_us = faults.not_ready_window_us
+        window = bool(window_us) and (now - self._ram.booted_at) % TICK < window_us
+        if not faults.not_ready(window):
             return False
-        self._not_ready_left = max(0, self._not_ready_left - 1)
-        self.counters[state.link_key(link)].not_ready_owed = True
+        self._ram.counters[state.link_key(link)].not_ready_owed = True
         return True
 
     def _read_words(self, request: ReadWords, link: Link, now: int) -> Result:
@@ -125,7 +120,7 @@ class ModbusSlave:
             return BAD_ADDRESS
         if self._busy(regs, link, now):
             return NOT_READY
-        return tuple(self.get(r, now) for r in regs)
+        return tuple(self.registers.get(r, now) for r in regs)
 
     def _read_bits(self, request: ReadBits, link: Link, now: int) -> Result:
         if request.function not in (1, 2):
@@ -138,7 +133,7 @@ class ModbusSlave:
             return BAD_ADDRESS
         if self._busy(regs, link, now):
             return NOT_READY
-        words = {r.address: self.get(r, now) for r in regs}
+        words = {r.address: self.registers.get(r, now) for r in regs}
         bits = range(request.address, request.address + request.count)
         return tuple(bool((words[b >> 4] >> (b & 0xF)) & 1) for b in bits)
 
@@ -149,7 +144,7 @@ class ModbusSlave:
         if self._busy(regs, link, now):
             return NOT_READY
         for reg, value in zip(regs, values, strict=True):
-            self.put(reg, value & 0xFFFF, now)
+            self.registers.put(reg, value & 0xFFFF, now)
         return None
 
     def _write_bits(self, first: int, values: tuple[bool, ...], link: Link, now: int) -> Result:
@@ -161,34 +156,11 @@ class ModbusSlave:
             return BAD_ADDRESS
         if self._busy(regs, link, now):
             return NOT_READY
-        words = {r.address: self.peek(r, now) for r in regs}
+        words = {r.address: self.registers.peek(r, now) for r in regs}
         for offset, value in enumerate(values):
             bit = first + offset
             mask = 1 << (bit & 0xF)
             words[bit >> 4] = (words[bit >> 4] | mask) if value else (words[bit >> 4] & ~mask)
         for reg in regs:
-            self.put(reg, words[reg.address], now)
+            self.registers.put(reg, words[reg.address], now)
         return None
-
-    # --- faults the line glue asks about -----------------------------------
-
-    def inject_not_ready(self, count: int = 1) -> None:
-        """The next ``count`` requests in the 32-bit area get "slave not ready"."""
-        self._not_ready_left += count
-
-    def inject_line_fault(
-        self, fault: state.LineFault | str, count: int = 1, link: Link = Link.RS485
-    ) -> None:
-        """Ask the line glue to corrupt the next ``count`` frames to this TES."""
-        try:
-            kind = state.LineFault(fault)
-        except ValueError:
-            raise ConfigError(
-                f"line fault {fault!r} not allowed (allowed: bad_crc, broken_character)"
-            ) from None
-        self._line_faults[state.link_key(link)].extend([kind] * count)
-
-    def take_line_fault(self, link: Link) -> state.LineFault | None:
-        """The line glue calls this once per frame it delivers to this TES."""
-        queue = self._line_faults[state.link_key(link)]
-        return queue.popleft() if queue else None

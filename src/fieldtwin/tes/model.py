@@ -2,42 +2,56 @@
 
     >>> from fieldtwin.tes import Tes
     >>> tes = Tes("TES 8EA", slave=3)
-    >>> tes.set_input(0, 5.0)          # volts on analog input 0
+    >>> tes.set_input("a0", 5.0)       # volts on analog input 0
     >>> tes.advance(1.0)
-    >>> tes.read(0x003)                # analog input No 0, in points
+    >>> tes.read(0x003)                # a master read of analog input No 0, in points
     512
 
-The memory map (§6) is data in :mod:`fieldtwin.tes.memmap`; the EEPROM lives
-in a SQLite :class:`ParameterStore` and is loaded into the MP words at each
-power-on (§1).  Sans-IO: time is the SimClock's.
+A ``Tes`` is composed of parts that each declare their own state: the RAM
+(:class:`state.Ram`), the I/O (digital inputs, outputs, analog inputs), the
+register file (the memory map of §6 over them), the master watching, the line
+faults and the slave adapter (the Modbus side).  The EEPROM lives in a SQLite
+:class:`ParameterStore` and is loaded into the MP words at each power-on (§1).
+Sans-IO: time is the SimClock's; the public API speaks seconds.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import cast
 
-from fieldtwin.clock import MS, Handle, SimClock, seconds
+from fieldtwin.clock import MS, S, SimClock, seconds
 from fieldtwin.errors import ConfigError
-from fieldtwin.modbus.model import Counter, Link
+from fieldtwin.modbus.model import Counter, Link, Request, Result
+from fieldtwin.signals import Constant
 from fieldtwin.tes import state
 from fieldtwin.tes.access import RegisterFile
 from fieldtwin.tes.analog import AnalogInputs, AnalogSource, dac_points
 from fieldtwin.tes.digital import DigitalInputs, Wiring
 from fieldtwin.tes.drivers import DiscreteDriver, DiscreteSource
 from fieldtwin.tes.eeprom import checked, mp_image
-from fieldtwin.tes.execute import ModbusSlave
-from fieldtwin.tes.memmap import Register, memory_map
+from fieldtwin.tes.execute import SlaveAdapter
+from fieldtwin.tes.fallback import MasterWatch
+from fieldtwin.tes.faults import FaultSurface, LineFaults, Param
+from fieldtwin.tes.inputs import InputRef, input_names, input_ref, level_note, parse_bool
+from fieldtwin.tes.kinds import Kind
+from fieldtwin.tes.memmap import Register, register_names
 from fieldtwin.tes.models import Family, TesModel, model_named
 from fieldtwin.tes.outputs import DigitalOutputs
 from fieldtwin.tes.params import Value, factory, parse_value
 from fieldtwin.tes.store import ParameterStore
 
-WATCHDOG_BASE = 100 * MS  # §6.2.3.1 Tb = 100 ms
+LED = str  # "on", "off" or "blink"
+_THRESHOLD_KINDS = (
+    Kind.LOW_THRESHOLD,
+    Kind.HIGH_THRESHOLD,
+    Kind.THRESHOLD_OUTPUTS,
+    Kind.THRESHOLD_POLARITY,
+)
 
 
-class Tes(RegisterFile, ModbusSlave):
+class Tes:
     """A TES of one of the ten models, with its own or a shared SimClock."""
 
     def __init__(
@@ -57,38 +71,55 @@ class Tes(RegisterFile, ModbusSlave):
         self.name = name or f"{self.model.name} #{slave or 1}"
         self.prm_jumper = prm_jumper
         self.store = store if isinstance(store, ParameterStore) else ParameterStore(store)
-        self.registers: dict[int, Register] = {r.address: r for r in memory_map(self.model)}
+        self.ram = state.Ram()
+        ram = self.ram
         self.di = DigitalInputs(self.model.digital_inputs, self.clock, self._filter_ticks)
         self.do = DigitalOutputs(self.model.digital_outputs, self._blink_word)
         self.ai = AnalogInputs(
-            self.model, self.clock, lambda: self.params, self._word, self._on_evaluate
+            self.model, self.clock, lambda: ram.params, ram.word, self._on_evaluate
+        )
+        self.line_faults = LineFaults()
+        self.registers = RegisterFile(
+            self.model, ram, self.di, self.do, self.ai, self._after_parameter_write
+        )
+        self.watch = MasterWatch(self.model, self.clock, ram, self.do)
+        self.slave_adapter = SlaveAdapter(
+            self.registers, ram, self.line_faults, self.watch.master_request
+        )
+        self.fault_surface = FaultSurface(
+            self.model, self.line_faults, link, self.di, self.set_wiring, self
         )
         self._drivers: dict[int, DiscreteDriver] = {}
-        self._watchdog: Handle | None = None
-        self.init_slave()
-        self._init_eeprom(slave)
-        self.powered = False
-        self.power_on()
+        self._boot(self._init_eeprom(slave))
 
     # --- EEPROM ------------------------------------------------------------
 
-    def _init_eeprom(self, slave: int | None) -> None:
+    def _init_eeprom(self, slave: int | None) -> dict[str, Value]:
+        """The EEPROM this TES starts with (stored first when new or renumbered)."""
         stored_model = self.store.model_of(self.name)
         if stored_model is not None and stored_model != self.model.name:
             raise ConfigError(
-                f"TES {self.name!r}: the parameter store holds a {stored_model},"
-                f" not a {self.model.name}"
+                f"TES {self.name!r}: the parameter store {self.store.where} holds a"
+                f" {stored_model}, not a {self.model.name}"
             )
-        values = self.eeprom() if stored_model is not None else factory(self.model)
+        if stored_model is None and self.store.readonly:
+            raise ConfigError(self.store.no_device(self.name))
+        stored = self.eeprom() if stored_model is not None else None
+        values = dict(stored) if stored is not None else factory(self.model)
         if slave is not None:  # §3.1.3 / §3.1.4 each port has its own slave number
             key = f"{state.link_key(self.link)}.slave"
             values[key] = parse_value(self.model, key, slave)
-        if stored_model is None or values != self.eeprom():
+        if values != stored:
             self.store.save(self.name, self.model.name, values)
+        return values
 
     def eeprom(self) -> dict[str, Value]:
         """The user settings in the EEPROM (factory values where none were written)."""
-        return checked(self.model, self.store.load(self.name))
+        stored = self.store.load(self.name)
+        try:
+            return checked(self.model, stored)
+        except ConfigError as exc:
+            raise ConfigError(f"{self.store.where}: device {self.name!r}: {exc}") from None
 
     def write_eeprom(self, values: Mapping[str, object]) -> None:
         """TESIS download: validate, write in one transaction; used at next power-on (§1)."""
@@ -98,124 +129,82 @@ class Tes(RegisterFile, ModbusSlave):
     # --- power (§1) --------------------------------------------------------
 
     def power_on(self) -> None:
-        now = self.booted_at = self.clock.now
-        # §3.1.2 the Prm jumper gives the factory settings; else the user settings
-        self.params = factory(self.model) if self.prm_jumper else self.eeprom()
-        self.words = mp_image(self.model, self.params)
-        self.status = state.POWER_ON
-        self.counters = {"rs485": state.LinkCounters(), "rs232": state.LinkCounters()}
-        self.ao_fallback = 0
-        self.wdg_blinking = False
-        self.di.power_on(now)
-        self.do.power_on(now, self.words.get(0x00D, 0) if self._mp_command() else 0)
-        self.ai.power_on(now)
-        self.powered = True
-        self._arm_watchdog(now)
-        if self.model.safety and self.safety_default():
-            self.status |= state.SAFETY
+        """24 V on: RAM starts afresh, the MP words are loaded from the EEPROM (§1)."""
+        self._boot(self.eeprom())
 
-    def _mp_command(self) -> bool:
-        return self.model.family is Family.DIGITAL_INPUTS
+    def _boot(self, eeprom: dict[str, Value]) -> None:
+        ram, now = self.ram, self.clock.now
+        ram.booted_at = now
+        # §3.1.2 the Prm jumper gives the factory settings; else the user settings
+        ram.params = factory(self.model) if self.prm_jumper else eeprom
+        ram.words = mp_image(self.model, ram.params)
+        ram.status = state.POWER_ON
+        ram.counters = {"rs485": state.LinkCounters(), "rs232": state.LinkCounters()}
+        ram.ao_fallback = 0
+        ram.wdg_blinking = False
+        self.di.power_on(now)
+        mp_command = self.model.family is Family.DIGITAL_INPUTS
+        self.do.power_on(now, ram.word(0x00D) if mp_command else 0)
+        self.ai.power_on(now)
+        ram.powered = True
+        self.watch.arm(now)
+        if self.registers.safety_default():
+            ram.status |= state.SAFETY
 
     def power_off(self) -> None:
-        self.powered = False
+        self.ram.powered = False
         self.di.power_off()
         self.ai.power_off()
-        if self._watchdog is not None:
-            self._watchdog.cancel()
-            self._watchdog = None
+        self.watch.stop()
 
     def power_cycle(self) -> None:
         """24 V off and on: RAM is lost, MP words reload from the EEPROM (§1)."""
         self.power_off()
         self.power_on()
 
-    # --- master watching and fallback (§3.1.3, §4.1.7, §6.4.11) ------------
+    @property
+    def powered(self) -> bool:
+        return self.ram.powered
 
-    def _watchdog_address(self) -> int:
-        return 0x03C if self.model.is_analog else 0x016
-
-    def _arm_watchdog(self, now: int) -> None:
-        if self._watchdog is not None:
-            self._watchdog.cancel()
-            self._watchdog = None
-        period = self.words.get(self._watchdog_address(), 0) * WATCHDOG_BASE
-        if period and self.powered:
-            self._watchdog = self.clock.schedule(now + period, self._fall_back)
-
-    def master_request(self, link: Link, now: int) -> None:
-        """AMB-TES-10: a request to this slave (or broadcast) on RS-485 re-arms the watchdog."""
-        self.wdg_blinking = False
-        if link is not Link.RS232:
-            self._arm_watchdog(now)
-
-    def _fall_back(self, now: int) -> None:
-        self._watchdog = None
-        self.status |= state.FALLBACK
-        self.wdg_blinking = True  # §3.1.3 "led Wdg will blinking"
-        if self.model.is_analog:
-            self._analog_fall_back()
-            return
-        w = self.words
-        if self.model.family is Family.DIGITAL_OUTPUTS:
-            or_ = (w[0x00E] | w[0x00F] << 16, w[0x010] | w[0x011] << 16)
-            and_ = (w[0x012] | w[0x013] << 16, w[0x014] | w[0x015] << 16)
-        else:
-            or_, and_ = (w[0x012], w[0x013]), (w[0x014], w[0x015])
-        self.do.fall_back(or_, and_)
-        self._sync_command()
-
-    def _analog_fall_back(self) -> None:
-        # §6.4.11.2 same layout as the command word; reflex outputs do not fall back
-        command = self.words[0x03D]
-        self.do.blink_select, self.do.command = (command >> 8) & 0xF, command & 0xF
-        enable = self.words[0x046]
-        for k in self.model.analog_outputs:  # §6.4.11.3 authorised outputs only
-            if (enable >> k) & 1:
-                self.words[0x014 + k] = self.words[0x03E + k]
-                self.ao_fallback |= 1 << k
-
-    def _sync_command(self) -> None:
-        if self._mp_command():
-            self.words[0x00D] = self.do.command & 0xFFFF
+    @property
+    def params(self) -> Mapping[str, Value]:
+        """The settings in use since the last power-on."""
+        return self.ram.params
 
     # --- behaviour hooks ---------------------------------------------------
 
     def _filter_ticks(self, value: bool) -> int:
         base = 0x01D if self.model.is_analog else 0x00A
-        return self.words.get(base + int(value), 0)
+        return self.ram.word(base + int(value))
 
     def _blink_word(self, i: int) -> int:
         base = {Family.DIGITAL_INPUTS: 0x00E, Family.DIGITAL_OUTPUTS: 0x007}.get(
             self.model.family, 0x01F
         )
-        return self.words.get(base + i, 0)
-
-    def _word(self, address: int) -> int:
-        return self.words.get(address, 0)
+        return self.ram.word(base + i)
 
     def _on_evaluate(self, now: int) -> None:
         # §6.4.1 bits 6/7 latched until the master resets them (AMB-TES-19)
         channels = self.ai.channels.values()
         if any(ch.low for ch in channels):
-            self.status |= state.LOW_ALARM
+            self.ram.status |= state.LOW_ALARM
         if any(ch.high for ch in channels):
-            self.status |= state.HIGH_ALARM
-        polarity = self.words.get(0x03B, 0)
+            self.ram.status |= state.HIGH_ALARM
+        polarity = self.ram.word(0x03B)
         reflex = self.ai.reflex()
         self.do.reflex = {o: v != bool((polarity >> o) & 1) for o, v in reflex.items()}
 
-    def after_parameter_write(self, kind: str, now: int) -> None:
-        if kind == "watchdog":
-            self._arm_watchdog(now)
-        elif kind == "storage_period":
+    def _after_parameter_write(self, kind: Kind, now: int) -> None:
+        if kind is Kind.WATCHDOG:
+            self.watch.arm(now)
+        elif kind is Kind.STORAGE_PERIOD:
             self.ai.restart_storage(now)
-        elif kind in ("low_threshold", "high_threshold", "threshold_outputs", "threshold_polarity"):
+        elif kind in _THRESHOLD_KINDS:
             self.ai.evaluate(now)
-        elif kind == "connection" and self.safety_default():
-            self.status |= state.SAFETY
+        elif kind is Kind.CONNECTION and self.registers.safety_default():
+            self.ram.status |= state.SAFETY
 
-    # --- public API --------------------------------------------------------
+    # --- SlaveDevice (the Modbus side) -------------------------------------
 
     @property
     def slave(self) -> int:
@@ -223,72 +212,215 @@ class Tes(RegisterFile, ModbusSlave):
         return self.slave_for(self.link)
 
     def slave_for(self, link: Link) -> int:
-        value = self.params[f"{state.link_key(link)}.slave"]
+        value = self.ram.params[f"{state.link_key(link)}.slave"]
         assert isinstance(value, int)
         return value
 
+    def execute(self, request: Request, link: Link, now: int, broadcast: bool) -> Result:
+        return self.slave_adapter.execute(request, link, now, broadcast)
+
     def answer_delay(self, link: Link) -> int:
-        value = self.params[f"{state.link_key(link)}.answer_delay_ms"]
+        """Microseconds: the port's answer delay (§3.1.3) plus a ``late_answer`` fault."""
+        value = self.ram.params[f"{state.link_key(link)}.answer_delay_ms"]
         assert isinstance(value, int)
-        return value * MS
+        return value * MS + self.line_faults.late_us
 
     def count(self, link: Link, counter: Counter, now: int) -> None:
-        self.counters[state.link_key(link)].bump(counter)
+        self.ram.counters[state.link_key(link)].bump(counter)
+
+    def take_line_fault(self, link: Link) -> state.LineFault | None:
+        """The RTU line calls this once per frame it delivers to this TES."""
+        return self.line_faults.take(link)
+
+    def status_word(self) -> int:
+        return self.registers.status_word()
+
+    def safety_default(self) -> bool:
+        return self.registers.safety_default()
+
+    # --- time (seconds) ----------------------------------------------------
+
+    @property
+    def now_s(self) -> float:
+        """Simulated time in seconds."""
+        return self.clock.now / S
 
     def advance(self, seconds_: float) -> None:
+        """Let ``seconds_`` simulated seconds pass."""
         self.clock.advance(seconds(seconds_))
 
-    def read(self, address: int) -> int:
-        """A master read of one word (memorized inputs are restored, §4.1.2)."""
-        return self.get(self._register(address), self.clock.now)
+    def advance_to(self, seconds_: float) -> None:
+        """Let simulated time reach ``seconds_`` (never back)."""
+        target = seconds(seconds_)
+        if target < self.clock.now:
+            raise ConfigError(f"time never goes back: {seconds_:g} s < now {self.now_s:g} s")
+        self.clock.run_until(target)
 
-    def peek_word(self, address: int) -> int:
-        """The word as it stands, without a master read's side effects."""
-        return self.peek(self._register(address), self.clock.now)
+    # --- words: master read / write, peek ------------------------------------
 
-    def write(self, address: int, value: int) -> None:
-        reg = self._register(address)
+    def read(self, address: int | str) -> int:
+        """A master read of one word, with every side effect a read on the wire has.
+
+        Memorized inputs are restored (§4.1.2), the watchdog is re-armed and the
+        Wdg LED stops blinking (AMB-TES-10), an analog model's status bits 0
+        and 1 are cleared by the exchange (§6.4.1).  Line faults do not apply.
+        """
+        reg = self.register(address)
+        return self._exchange(lambda now: self.registers.get(reg, now))
+
+    def peek(self, address: int | str) -> int:
+        """The word as it stands, without any side effect."""
+        return self.registers.peek(self.register(address), self.clock.now)
+
+    def peek_word(self, address: int | str) -> int:
+        """Older name of ``peek``."""
+        return self.peek(address)
+
+    def write(self, address: int | str, value: int) -> None:
+        """A master write of one word (fc 06), with a request's side effects (see ``read``)."""
+        reg = self.register(address)
         if not reg.access.writable:
-            raise ConfigError(f"{self.model.name} word {address:03X}h ({reg.name}) is read only")
-        if not 0 <= value <= 0xFFFF:
-            raise ConfigError(f"word value {value} out of range (allowed 0..65535)")
-        self.put(reg, value, self.clock.now)
+            raise ConfigError(
+                f"{self.model.name} word {reg.address:03X}h ({reg.name}) is read only"
+            )
+        if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= 0xFFFF:
+            raise ConfigError(f"word value {value!r} out of range (allowed 0..65535)")
+        self._exchange(lambda now: self.registers.put(reg, value, now))
 
-    def _register(self, address: int) -> Register:
-        reg = self.registers.get(address)
+    def _exchange(self, action: Callable[[int], int | None]) -> int:
+        if not self.ram.powered:
+            raise ConfigError(
+                f"{self.name}: powered off, a master gets no answer (peek shows the word)"
+            )
+        now = self.clock.now
+        self.slave_adapter.begin_exchange(self.link, now)
+        value = action(now)
+        self.slave_adapter.end_exchange()
+        return value or 0
+
+    def register(self, address: int | str) -> Register:
+        """The documented word at ``address``, or of that name (``"analog_input[3]"``)."""
+        if isinstance(address, str):
+            reg = register_names(self.model).get(address.strip())
+            if reg is None:
+                raise ConfigError(
+                    f"{self.model.name} has no word named {address!r}"
+                    f" (see `fieldtwin tesis --model {self.model.name!r} map`)"
+                )
+            return reg
+        reg = self.registers.table.get(address)
         if reg is None:
             raise ConfigError(f"{self.model.name} has no word at address {address:03X}h")
         return reg
 
-    def set_input(self, i: int, value: bool | float) -> None:
-        """A digital input (bool) or an analog input (volts or milliamps)."""
+    # --- inputs --------------------------------------------------------------
+
+    def input_names(self) -> Mapping[str, str]:
+        """name -> description: ``"0"``.. digital, ``"a0"``.. analog (docs/tes.md)."""
+        return input_names(self.model)
+
+    def _input(self, i: int | str, analog: bool) -> InputRef:
+        if isinstance(i, str):
+            return input_ref(self.model, i)
+        return input_ref(self.model, f"a{i}" if analog else str(i))
+
+    def set_input(self, i: int | str, value: bool | float | str) -> str | None:
+        """Digital input (bool, or an on/off word) or analog input (volts / milliamps).
+
+        ``i`` is a name (``"3"``, ``"a2"``) or a number: with a number, a bool
+        value means the digital input, a number the analog input.  An analog
+        level beyond the converter's span saturates (§4.2.4): the note saying
+        so is returned (None otherwise).
+        """
         now = self.clock.now
-        if isinstance(value, bool):
-            self._drop_driver(i)
-            self.di.set_contact(self._digital_index(i), value, now)
-        else:
-            self.ai.set_level(self._analog_index(i), float(value), now)
+        ref = self._input(i, not isinstance(value, bool | str))
+        if ref.analog:
+            if isinstance(value, str):
+                raise ConfigError(
+                    f"{self.model.name} analog input {ref.name}: {value!r} is not a number"
+                )
+            note = level_note(self.model, ref.index, value)
+            self.ai.set_level(ref.index, float(value), now)
+            return note
+        self._drop_driver(ref.index)
+        self.di.set_contact(ref.index, self._on_off(ref, value), now)
+        return None
+
+    def _on_off(self, ref: InputRef, value: bool | float | str) -> bool:
+        if isinstance(value, str):
+            return parse_bool(value, f"{self.model.name} input {ref.name}")
+        if isinstance(value, bool) or value in (0, 1):
+            return bool(value)
+        raise ConfigError(f"{self.model.name} input {ref.name}: {value!r} is not on or off")
 
     def set_signal(
-        self, i: int, signal: AnalogSource | DiscreteSource, digital: bool | None = None
-    ) -> None:
-        """Drive an input from a fieldtwin.signals signal (value_at / next_change)."""
-        if digital is None:
+        self, i: int | str, signal: AnalogSource | DiscreteSource, digital: bool | None = None
+    ) -> str | None:
+        """Drive an input from a fieldtwin.signals signal (value_at / next_change).
+
+        A constant analog level beyond the converter's span returns the note of
+        ``set_input``; a varying signal saturates where it leaves the span.
+        """
+        if digital is None and isinstance(i, int):
             digital = not self.model.analog_inputs
+        ref = self._input(i, not digital)
         now = self.clock.now
-        if digital:
-            self._drop_driver(self._digital_index(i))
+        if not ref.analog:
+            self._drop_driver(ref.index)
             source = cast(DiscreteSource, signal)
-            driver = DiscreteDriver(self.clock, source, lambda v, t: self.di.set_contact(i, v, t))
-            self._drivers[i] = driver
+            k = ref.index
+            driver = DiscreteDriver(self.clock, source, lambda v, t: self.di.set_contact(k, v, t))
+            self._drivers[k] = driver
             driver.start(now)
-        else:
-            self.ai.set_signal(self._analog_index(i), signal, now)
+            return None
+        note = None
+        if isinstance(signal, Constant):  # a level given as a signal
+            note = level_note(self.model, ref.index, signal.value)
+        self.ai.set_signal(ref.index, signal, now)
+        return note
 
     def _drop_driver(self, i: int) -> None:
         driver = self._drivers.pop(i, None)
         if driver is not None:
             driver.stop()
+
+    # --- outputs -------------------------------------------------------------
+
+    def digital_output(self, i: int) -> bool:
+        return self.do.state(i, self.clock.now)
+
+    def analog_output(self, k: int) -> float:
+        """Analog output k in volts or milliamps (§4.3.1)."""
+        if k not in self.model.analog_outputs:
+            raise ConfigError(f"{self.model.name}: no analog output {k}")
+        points = dac_points(self.ram.word(0x014 + k), self.ram.params, k)
+        return points / 32767 * self.model.analog_range.full_scale
+
+    @property
+    def leds(self) -> dict[str, LED]:
+        """§3.1.2 front-panel LEDs: Pwr, Run, Prm (green) and Wdg (red), "on"/"off"/"blink"."""
+        powered = self.ram.powered
+        on = "on" if powered else "off"
+        return {
+            "Pwr": on,
+            "Run": on,
+            "Prm": "on" if self.prm_jumper and powered else "off",
+            "Wdg": "blink" if self.ram.wdg_blinking and powered else "off",  # §3.1.3
+        }
+
+    # --- faults --------------------------------------------------------------
+
+    def fault_names(self) -> Mapping[str, str]:
+        """name -> description of every fault this model accepts (docs/tes.md)."""
+        return self.fault_surface.names()
+
+    def inject_fault(self, name: str, on: bool, **params: Param) -> None:
+        """Set (``on``) or clear a named fault; ConfigError naming what is allowed."""
+        self.fault_surface.inject(name, on, params)
+
+    def active_faults(self) -> dict[str, dict[str, Param]]:
+        """The faults in force, each with its parameters."""
+        return self.fault_surface.active()
 
     def set_wiring(self, i: int, wiring: Wiring | str) -> None:
         """TES 32ET-S: a short circuit or a broken wire on input ``i`` (§4.1.5)."""
@@ -298,41 +430,31 @@ class Tes(RegisterFile, ModbusSlave):
             w = Wiring(wiring)
         except ValueError:
             raise ConfigError(f"wiring {wiring!r} not allowed (allowed: ok, short, open)") from None
-        self.di.set_wiring(self._digital_index(i), w, self.clock.now)
-        if self.safety_default():
-            self.status |= state.SAFETY  # §6.2.1 bit 2, reset by the master
+        self.di.set_wiring(self._input(i, False).index, w, self.clock.now)
+        if self.registers.safety_default():
+            self.ram.status |= state.SAFETY  # §6.2.1 bit 2, reset by the master
 
-    def _digital_index(self, i: int) -> int:
-        if not 0 <= i < self.model.digital_inputs:
-            raise ConfigError(
-                f"{self.model.name}: no digital input {i}"
-                f" (allowed 0..{self.model.digital_inputs - 1})"
-            )
-        return i
-
-    def _analog_index(self, i: int) -> int:
-        if i not in self.model.analog_inputs:
-            allowed = ", ".join(map(str, self.model.analog_inputs)) or "none"
-            raise ConfigError(f"{self.model.name}: no analog input {i} (allowed: {allowed})")
-        return i
-
-    def digital_output(self, i: int) -> bool:
-        return self.do.state(i, self.clock.now)
-
-    def analog_output(self, k: int) -> float:
-        """Analog output k in volts or milliamps (§4.3.1)."""
-        if k not in self.model.analog_outputs:
-            raise ConfigError(f"{self.model.name}: no analog output {k}")
-        points = dac_points(self.words.get(0x014 + k, 0), self.params, k)
-        return points / 32767 * self.model.analog_range.full_scale
+    def inject_not_ready(self, count: int = 1) -> None:
+        """The next ``count`` requests in the 32-bit area get "slave not ready"."""
+        self.line_faults.not_ready_left += count
 
     @property
-    def leds(self) -> dict[str, str]:
-        """§3.1.2 front-panel LEDs."""
-        on = "on" if self.powered else "off"
-        return {
-            "Pwr": on,
-            "Run": on,
-            "Prm": "on" if self.prm_jumper and self.powered else "off",
-            "Wdg": "blinking" if self.wdg_blinking and self.powered else "off",
-        }
+    def not_ready_window_us(self) -> int:
+        """Each 100 ms, "slave not ready" in the 32-bit area for this long (0: never)."""
+        return self.line_faults.not_ready_window_us
+
+    @not_ready_window_us.setter
+    def not_ready_window_us(self, value: int) -> None:
+        self.line_faults.not_ready_window_us = value
+
+    def inject_line_fault(
+        self, fault: state.LineFault | str, count: int = 1, link: Link = Link.RS485
+    ) -> None:
+        """Ask the line glue to corrupt the next ``count`` frames to this TES."""
+        try:
+            kind = state.LineFault(fault)
+        except ValueError:
+            raise ConfigError(
+                f"line fault {fault!r} not allowed (allowed: bad_crc, broken_character)"
+            ) from None
+        self.line_faults.queue(kind, count, link)

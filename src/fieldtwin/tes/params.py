@@ -7,8 +7,10 @@ map, the register it is loaded into at every power-on (§1, §6.1 glossary).
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
+from types import MappingProxyType
 
 from fieldtwin.errors import ConfigError
 from fieldtwin.tes.models import Family, TesModel
@@ -156,11 +158,12 @@ def _analog(model: TesModel) -> Iterator[ParamSpec]:
         yield ParamSpec(p + "fallback", 0, "fallback value (§4.3.2)", -32768, 32767)
 
 
-def param_specs(model: TesModel) -> dict[str, ParamSpec]:
-    """Every EEPROM parameter of ``model``, in TESIS screen order."""
+@functools.cache
+def param_specs(model: TesModel) -> Mapping[str, ParamSpec]:
+    """Every EEPROM parameter of ``model``, in TESIS screen order (built once per model)."""
     specs = [*_link("rs485", 38400), *_link("rs232", 9600), *_digital(model)]
     specs += list(_analog(model) if model.is_analog else _masks(model))
-    return {s.name: s for s in specs}
+    return MappingProxyType({s.name: s for s in specs})
 
 
 def factory(model: TesModel) -> dict[str, Value]:

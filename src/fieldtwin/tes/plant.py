@@ -26,6 +26,7 @@ from fieldtwin.modbus.model import Link
 from fieldtwin.signals import analog_from_spec, discrete_from_spec
 from fieldtwin.tes.model import Tes
 from fieldtwin.tes.models import model_named
+from fieldtwin.tes.port import check_fixed_format
 from fieldtwin.transports.url import Endpoint, parse_endpoint
 
 KEYS = ("model", "slave", "endpoint", "name", "store", "prm_jumper", "link", "inputs", "faults")
@@ -99,6 +100,10 @@ def endpoint_of(table: Mapping[str, Any], at: str) -> Endpoint:
         raise ConfigError(
             f"{at}.endpoint: 'memory' is for tests (allowed: tcp, rtu+tcp, pty, serial)"
         )
+    try:  # §3.1.3 8 data bits and 1 stop bit are fixed
+        check_fixed_format(endpoint.settings)
+    except ConfigError as exc:
+        raise ConfigError(f"{at}.endpoint: {exc}") from None
     return endpoint
 
 

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 
 from fieldtwin.modbus.model import Counter, Link
 from fieldtwin.tes.models import Family
+from fieldtwin.tes.params import Value
 
 POWER_ON = 1 << 0  # bit 0: 24 V power on
 FALLBACK = 1 << 1  # bit 1: fallback, the master stopped asking
@@ -62,3 +63,24 @@ class LinkCounters:
             self.not_ready_owed = False
         i = COUNTER_ORDER.index(counter)
         self.values[i] = (self.values[i] + 1) & 0xFFFF
+
+
+@dataclass(slots=True)
+class Ram:
+    """The volatile memory of one TES, lost at each power-off (§1).
+
+    ``params`` are the settings in use (the EEPROM's, or the factory's with the
+    Prm jumper); ``words`` the MP words and other plain RAM words of the map.
+    """
+
+    params: dict[str, Value] = field(default_factory=dict)
+    words: dict[int, int] = field(default_factory=dict)
+    status: int = 0
+    counters: dict[str, LinkCounters] = field(default_factory=dict)
+    ao_fallback: int = 0  # bit k: analog output k in its fallback position (§6.4.4 bit 1)
+    booted_at: int = 0  # simulated time of the last power-on
+    powered: bool = False
+    wdg_blinking: bool = False  # §3.1.3 the Wdg LED blinks from the fallback to the next request
+
+    def word(self, address: int) -> int:
+        return self.words.get(address, 0)

@@ -26,8 +26,8 @@ from fieldtwin.errors import ConfigError
 from fieldtwin.tes.eeprom import problems
 from fieldtwin.tes.memmap import memory_map
 from fieldtwin.tes.model import Tes
-from fieldtwin.tes.models import MODELS, model_named
-from fieldtwin.tes.params import Value, complete, param_specs
+from fieldtwin.tes.models import MODELS, TesModel, model_named
+from fieldtwin.tes.params import Value, complete, factory, param_specs
 from fieldtwin.tes.store import ParameterStore
 from fieldtwin.tes.tesis_io import apply_forces, io_tables
 
@@ -58,6 +58,10 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
+# commands that change nothing in the store: they never create a file nor a device
+READ_ONLY = frozenset({"show", "validate", "map", "export", "iotest"})
+
+
 def main(argv: list[str]) -> int:
     args = _parser().parse_args(argv)
     console = Console(highlight=False, width=120)
@@ -65,25 +69,55 @@ def main(argv: list[str]) -> int:
         if args.command == "models":
             _models(console)
             return 0
-        tes = _open(args)
+        if args.command == "map" and args.model is not None:
+            _print_map(model_named(args.model), console)  # the map needs no store
+            return 0
+        tes = _open(args, writable=args.command not in READ_ONLY)
         return _COMMANDS[args.command](tes, args, console)
     except ConfigError as exc:
         Console(stderr=True, highlight=False, soft_wrap=True).print(f"tesis: {exc}", markup=False)
         return 2
 
 
-def _open(args: argparse.Namespace) -> Tes:
-    store = ParameterStore(args.store)
+_WRITERS_HINT = "`set`, `factory` or `import` with --model MODEL writes one"
+
+
+def _open(args: argparse.Namespace, writable: bool) -> Tes:
+    store = ParameterStore(args.store, readonly=not writable)
     devices = store.devices()
     device = args.device
     if device is None and len(devices) == 1:
         device = next(iter(devices))
+    elif device is None and len(devices) > 1:
+        raise ConfigError(
+            f"{store.where} holds several TES: give --device"
+            f" (devices stored: {store.describe_devices()})"
+        )
+    elif device is not None and device not in devices and (store.readonly or not args.model):
+        # only a writing command with a model may add a device
+        raise ConfigError(f"{store.no_device(device)}; {_WRITERS_HINT}")
     model = args.model or (devices.get(device) if device else None)
     if model is None:
-        where = args.store or "the in-memory store"
-        known = ", ".join(devices) or "none"
-        raise ConfigError(f"{where}: give --model (and --device; devices stored: {known})")
-    return Tes(model_named(model), store=store, name=device, prm_jumper=args.prm)
+        raise ConfigError(
+            f"{store.where} holds no TES: give --model (and --device NAME; {_WRITERS_HINT})"
+        )
+    if store.readonly and (device or "") not in devices:
+        name = device or f"{model_named(model).name} #1"
+        raise ConfigError(
+            f"TES parameter store {store.where} holds no TES {name!r} (devices stored:"
+            f" {store.describe_devices()}); a read-only command stores none: {_WRITERS_HINT}"
+        )
+    try:
+        found = model_named(model)
+    except ConfigError as exc:
+        raise ConfigError(f"{store.where}: device {device!r}: {exc}") from None
+    stored = devices.get(device or "")
+    if args.device is None and stored is not None and stored != found.name:
+        raise ConfigError(
+            f"{store.where} holds {device!r}, a {stored}, not a {found.name}:"
+            f" give --device NAME for another TES"
+        )
+    return Tes(found, store=store, name=device, prm_jumper=args.prm)
 
 
 def _models(console: Console) -> None:
@@ -132,21 +166,23 @@ def _validate(tes: Tes, args: argparse.Namespace, console: Console) -> int:
 
 
 def _factory(tes: Tes, args: argparse.Namespace, console: Console) -> int:
-    from fieldtwin.tes.params import factory
-
     tes.store.save(tes.name, tes.model.name, factory(tes.model))
     console.print(f"{tes.name}: factory settings written", markup=False)
     return 0
 
 
 def _map(tes: Tes, args: argparse.Namespace, console: Console) -> int:
-    table = Table("hex", "dec", "access", "name", "meaning", title=f"{tes.model.name} memory map")
-    for reg in memory_map(tes.model):
+    _print_map(tes.model, console)
+    return 0
+
+
+def _print_map(model: TesModel, console: Console) -> None:
+    table = Table("hex", "dec", "access", "name", "meaning", title=f"{model.name} memory map")
+    for reg in memory_map(model):
         table.add_row(
             f"{reg.address:03X}h", str(reg.address), reg.access.value, reg.name, reg.meaning
         )
     console.print(table)
-    return 0
 
 
 def _export(tes: Tes, args: argparse.Namespace, console: Console) -> int:
@@ -182,15 +218,23 @@ def _import(tes: Tes, args: argparse.Namespace, console: Console) -> int:
         raise ConfigError(f"import: {path}: {exc}") from None
     if not isinstance(doc, dict) or not isinstance(doc.get("parameters"), dict):
         raise ConfigError(f"import: {path}: no [parameters] table")
-    if model_named(str(doc.get("model", ""))) is not tes.model:
+    try:
+        model = model_named(str(doc.get("model", "")))
+    except ConfigError as exc:
+        raise ConfigError(f"import: {path}: model: {exc}") from None
+    if model is not tes.model:
         raise ConfigError(f"import: {path}: holds a {doc.get('model')}, not a {tes.model.name}")
-    tes.write_eeprom(doc["parameters"])
+    try:
+        tes.write_eeprom(doc["parameters"])
+    except ConfigError as exc:
+        raise ConfigError(f"import: {path}: {exc}") from None
     console.print(f"{tes.name}: EEPROM loaded from {path}", markup=False)
     return 0
 
 
 def _iotest(tes: Tes, args: argparse.Namespace, console: Console) -> int:
-    apply_forces(tes, args.input, args.output)
+    for note in apply_forces(tes, args.input, args.output):
+        console.print(f"note: {note}", markup=False)
     tes.advance(args.advance)
     for table in io_tables(tes):
         console.print(table)

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import math
+
 from rich.table import Table
 
 from fieldtwin.errors import ConfigError
+from fieldtwin.tes.inputs import input_ref, parse_bool
 from fieldtwin.tes.model import Tes
 from fieldtwin.tes.models import Family
 from fieldtwin.words import to_signed
@@ -19,9 +22,12 @@ def _split(item: str, what: str) -> tuple[str, str]:
 
 def _number(text: str, item: str) -> float:
     try:
-        return float(text)
+        value = float(text)
     except ValueError:
         raise ConfigError(f"iotest {item!r}: {text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise ConfigError(f"iotest {item!r}: {text!r} is not a finite number")
+    return value
 
 
 def _index(text: str, item: str) -> int:
@@ -31,13 +37,18 @@ def _index(text: str, item: str) -> int:
         raise ConfigError(f"iotest {item!r}: {text!r} is not a channel number") from None
 
 
-def apply_forces(tes: Tes, inputs: list[str], outputs: list[str]) -> None:
+def apply_forces(tes: Tes, inputs: list[str], outputs: list[str]) -> list[str]:
+    """Apply ``I=V`` inputs and outputs; the notes of inputs that saturate (§4.2.4)."""
+    notes = []
     for item in inputs:
         name, value = _split(item, "input")
         if name.startswith("a"):
-            tes.set_input(_index(name[1:], item), _number(value, item))
+            note = tes.set_input(input_ref(tes.model, name).name, _number(value, item))
         else:
-            tes.set_input(_index(name, item), value not in ("0", "false", "off"))
+            ref = input_ref(tes.model, name)
+            note = tes.set_input(ref.name, parse_bool(value, f"iotest --input {item!r}"))
+        if note is not None:
+            notes.append(note)
     for item in outputs:
         name, value = _split(item, "output")
         if name.startswith("a"):
@@ -46,7 +57,9 @@ def apply_forces(tes: Tes, inputs: list[str], outputs: list[str]) -> None:
                 raise ConfigError(f"iotest {item!r}: {tes.model.name} has no analog output {k}")
             tes.write(0x014 + k, round(_number(value, item)) & 0xFFFF)
         else:
-            force_digital(tes, _index(name, item), value not in ("0", "false", "off"))
+            on = parse_bool(value, f"iotest --output {item!r}")
+            force_digital(tes, _index(name, item), on)
+    return notes
 
 
 def force_digital(tes: Tes, i: int, on: bool) -> None:
@@ -63,8 +76,8 @@ def force_digital(tes: Tes, i: int, on: bool) -> None:
     else:
         address, bit, select = 0x00D, i, 0x00C
     select_bit = bit + 8 if family is Family.ANALOG else bit
-    tes.write(select, tes.peek_word(select) & ~(1 << select_bit) & 0xFFFF)
-    word = tes.peek_word(address)
+    tes.write(select, tes.peek(select) & ~(1 << select_bit) & 0xFFFF)
+    word = tes.peek(address)
     tes.write(address, (word | (1 << bit)) if on else (word & ~(1 << bit) & 0xFFFF))
 
 
@@ -90,13 +103,13 @@ def io_tables(tes: Tes) -> list[Table]:
         t = Table("input", f"level ({unit})", "value", "state", title=f"{m.name} analog inputs")
         for k in m.analog_inputs:
             level = tes.ai.level(k, now)
-            value = to_signed(tes.peek_word(0x003 + k))
-            t.add_row(f"a{k}", f"{level:.3f}", str(value), f"{tes.peek_word(0x00B + k):04X}")
+            value = to_signed(tes.peek(0x003 + k))
+            t.add_row(f"a{k}", f"{level:.3f}", str(value), f"{tes.peek(0x00B + k):04X}")
         tables.append(t)
     if m.analog_outputs:
         t = Table("output", "word", f"level ({unit})", title=f"{m.name} analog outputs")
         for k in m.analog_outputs:
-            word = to_signed(tes.peek_word(0x014 + k))
+            word = to_signed(tes.peek(0x014 + k))
             t.add_row(f"a{k}", str(word), f"{tes.analog_output(k):.3f}")
         tables.append(t)
     return tables
