@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fieldtwin.errors import ConfigError, ProtocolError
-from fieldtwin.tsx.module import FaultCategory, Leds, ModuleEvent, ModuleState
+from fieldtwin.tsx.module import FaultCategory, ModuleEvent, ModuleState
 from fieldtwin.tsx.plc import Plc
 from fieldtwin.tsx.txt import TxtState
 from tests.tsx.double import CONVERTER, DOUBLE, SENSOR, TERMINAL_BLOCK, Double
@@ -28,10 +28,10 @@ def test_initial_self_test_bits_and_leds() -> None:
     plc, mod = make()
     plc.advance(0.05)
     assert plc.read("IW5,0,9") == 1 and plc.read("IW5,0,3") == 0
-    assert mod.leds() == Leds(ok=True, err=True, f=False)
+    assert mod.leds == {"OK": "on", "ERR": "on", "F": "off"}
     plc.advance(2.0)
     assert plc.read("IW5,0,9") == 0 and plc.read("IW5,0,3") == 1
-    assert mod.leds() == Leds(ok=True, err=False, f=False)
+    assert mod.leds == {"OK": "on", "ERR": "off", "F": "off"}
     assert plc.read("I5,S") == 0
 
 
@@ -65,10 +65,10 @@ def test_application_fault_latches_until_the_fault_string_is_read() -> None:
     mod.inject_fault("sensor", True)
     plc.advance(0.02)
     assert (plc.read("IW5,0,4"), plc.read("IW5,0,7")) == (1, 1)
-    assert mod.leds().err and plc.read("I5,S") == 0 and mod.running  # keeps running
+    assert mod.leds["ERR"] == "on" and plc.read("I5,S") == 0 and mod.running  # keeps running
     mod.inject_fault("sensor", False)
     plc.advance(0.02)
-    assert plc.read("IW5,0,7") == 1 and not mod.leds().err  # memorised, LED live
+    assert plc.read("IW5,0,7") == 1 and mod.leds["ERR"] == "off"  # memorised, LED live
     r = plc.exchange(m=M, c=0x47, recv_bytes=8)
     assert r.v == 0x77 and r.s == 8 and r.data[SENSOR // 8] == 1 << (SENSOR % 8)
     plc.advance(0.02)
@@ -116,7 +116,7 @@ def test_module_fault_stops_the_module_and_sets_the_fault_bit() -> None:
     plc.advance(0.02)
     assert plc.read("IW5,0,C") == 0 and plc.read("I5,S") == 1
     assert plc.read("IW5,0,A") == 1 and plc.read("IW5,0,6") == 1
-    assert not mod.leds().ok
+    assert mod.leds["OK"] == "off"
     mod.inject_fault("terminal_block", False)
     plc.advance(0.02)
     assert plc.read("IW5,0,C") == 1 and plc.read("I5,S") == 0 and plc.read("IW5,0,A") == 0
@@ -130,7 +130,7 @@ def test_blocking_fault_takes_the_module_out_of_service() -> None:
     plc.advance(0.02)
     assert mod.state is ModuleState.BLOCKED
     assert plc.read("IW5,0,8") == 1 and plc.read("I5,S") == 1
-    assert mod.leds() == Leds(ok=False, err=False, f=True)
+    assert mod.leds == {"OK": "off", "ERR": "off", "F": "on"}
     r = plc.exchange(m=M, c=0x0F, recv_bytes=27)
     assert r.e and r.s == 4  # module fault
 
@@ -175,7 +175,7 @@ def test_removal_and_insertion_under_power() -> None:
     plc.remove(0, 5)
     plc.advance(0.02)
     assert plc.read("I5,S") == 1 and plc.read("IW5,0") == 0x0100  # bit 8: module absent
-    assert mod.leds() == Leds(False, False, False)
+    assert mod.leds == {"OK": "off", "ERR": "off", "F": "off"}
     plc.reinsert(0, 5)
     plc.advance(0.02)
     assert plc.read("IW5,0,9") == 1  # self-test again
@@ -304,11 +304,17 @@ def _apply(plc: Plc, mod: Double, op: tuple[Any, ...]) -> None:
         plc.reset_text_block(op[1])
 
 
+def _panel(ok: bool, err: bool, f: bool) -> dict[str, str]:
+    return {name: "on" if lit else "off" for name, lit in (("OK", ok), ("ERR", err), ("F", f))}
+
+
 def _check_status_word(mod: Double) -> None:
     state, word = mod.state, mod.iw[0]
     bit = lambda n: bool(word >> n & 1)  # noqa: E731
     if state is ModuleState.OFF:
-        assert word == 0 and mod.leds() == Leds(False, False, False) and mod.module_fault
+        assert (
+            word == 0 and mod.leds == {"OK": "off", "ERR": "off", "F": "off"} and mod.module_fault
+        )
         return
     module_fault = mod._faults.any(FaultCategory.MODULE, memorised=False)
     application = mod._faults.any(FaultCategory.APPLICATION, memorised=False)
@@ -324,9 +330,9 @@ def _check_status_word(mod: Double) -> None:
     blocked = state is ModuleState.BLOCKED
     assert mod.module_fault == (blocked or module_fault)
     if state is ModuleState.OPERATIONAL:
-        assert mod.leds() == Leds(not module_fault, application, False)
+        assert mod.leds == _panel(not module_fault, application, False)
     else:
-        assert mod.leds() == (Leds(False, False, True) if blocked else Leds(True, True, False))
+        assert mod.leds == (_panel(False, False, True) if blocked else _panel(True, True, False))
 
 
 @settings(max_examples=150)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import enum
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal
 
 from fieldtwin.clock import SimClock
 
@@ -24,19 +24,8 @@ class ModuleEvent(enum.Enum):
     POWER_OFF = "power off"
 
 
-@dataclass(frozen=True, slots=True)
-class Leds:
-    """The front-panel LEDs as readable state."""
-
-    ok: bool
-    err: bool
-    f: bool
-
-    def __str__(self) -> str:
-        return " ".join(f"{n}={'on' if v else 'off'}" for n, v in self._asdict().items())
-
-    def _asdict(self) -> dict[str, bool]:
-        return {"OK": self.ok, "ERR": self.err, "F": self.f}
+# A front-panel LED: lit, dark or blinking
+LedState = Literal["on", "off", "blink"]
 
 
 @dataclass(frozen=True, slots=True)

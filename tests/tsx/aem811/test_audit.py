@@ -164,7 +164,7 @@ def test_2_3_4_open_input_reads_ehl_and_the_thresholds_see_it() -> None:
     mod.set_input(0, open_circuit=True)
     plc.advance(2.5)
     assert plc.read("IW5,3") == RANGES[2].ehl and plc.read("I5,8") == 1
-    assert plc.read("IW5,1,8") == 1 and mod.leds().err
+    assert plc.read("IW5,1,8") == 1 and mod.leds["ERR"] == "on"
 
 
 def test_0_20_ma_open_line_is_a_zero_current() -> None:

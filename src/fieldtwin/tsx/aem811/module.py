@@ -27,8 +27,6 @@ from fieldtwin.tsx.aem811.sequencer import SLOT_US, Sequencer, Slot
 from fieldtwin.tsx.aem811.thresholds import ThresholdDetector
 from fieldtwin.tsx.module import FaultCategory, IntelligentModule, ModuleContext, ModuleState
 from fieldtwin.tsx.textblock import (
-    ERR_MODULE_FAULT,
-    MODULE_SYSTEM,
     V_OK_WRITE,
     Answer,
     Exchange,
@@ -274,7 +272,7 @@ class Aem811(IntelligentModule):
     def ack_thresholds(self, now: int) -> None:
         """AEM 4.3-1: install the written thresholds and acknowledge with H'FE'."""
         exchange, self.pending_thresholds = self.pending_thresholds, None
-        if exchange is None or exchange.done:
+        if exchange is None:
             return
         level = 0 if exchange.request.code == requests.WRITE_T0 else 1
         self.thresholds.write_table(level, exchange.request.data)
@@ -315,12 +313,8 @@ class Aem811(IntelligentModule):
         self._cancel_event()
         self._acquiring, self._sequencer = None, None
         # AEM 4.4-1: a blocked module makes no exchange; what it held (a threshold
-        # write, a request sent during the self-test) ends with a module fault
+        # write, a request sent during the self-test) was ended by the base (module fault)
         self.pending_thresholds = None
-        for key in (requests.CHANNELS, MODULE_SYSTEM):
-            exchange = self.pending_exchange(key)
-            if exchange is not None:
-                exchange.complete(Answer.fault(ERR_MODULE_FAULT), now)
 
     def on_self_test_done(self, now: int) -> None:
         self.refresh_words()

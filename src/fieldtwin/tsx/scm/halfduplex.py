@@ -103,7 +103,7 @@ class HalfDuplexChannel(Channel):
         return [exchange] if exchange is not None else []
 
     def _complete(self, answer: Answer, now: int) -> None:
-        if self.exchange is not None:
+        if self.exchange is not None and not self.exchange.done:  # request 2 ended early
             self.exchange.complete(answer, now)
 
     def _cancel_timers(self) -> None:
