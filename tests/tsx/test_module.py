@@ -9,8 +9,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fieldtwin.errors import ConfigError, ProtocolError
+from fieldtwin.tsx.messages import Exchanges
 from fieldtwin.tsx.module import FaultCategory, ModuleEvent, ModuleState
 from fieldtwin.tsx.plc import Plc
+from fieldtwin.tsx.textblock import Answer, Exchange, Request
 from fieldtwin.tsx.txt import TxtState
 from tests.tsx.double import CONVERTER, DOUBLE, SENSOR, TERMINAL_BLOCK, Double
 
@@ -224,7 +226,7 @@ def test_common_requests() -> None:
 def test_requests_during_self_test_are_held_until_it_ends() -> None:
     plc, mod = make()
     r = plc.exchange(m=M, c=0x0F, recv_bytes=27)
-    assert r.v == 0x3F and r.ended_at >= 2_000_000
+    assert r.v == 0x3F and r.ended_at_us >= 2_000_000
 
 
 def test_state_machine_rejects_an_impossible_event() -> None:
@@ -360,3 +362,23 @@ def test_any_sequence_of_events_ends_in_a_legal_state(ops: list[tuple[Any, ...]]
     plc.advance(0.02)
     _check_status_word(mod)
     assert plc.read("IW5,0") & 0x03D8 == 0x0008  # ready: no fault, no self-test
+
+
+def test_a_second_completion_of_an_exchange_raises() -> None:
+    # issue 9 item 4: it was silently ignored, which hid dead code in the AEM
+    exchange = Exchange(Request(0x0F, 0x63, b"", 27), 0, lambda e, at: None)
+    exchange.complete(Answer(0x3F), 5)
+    with pytest.raises(ProtocolError, match="C=0F channel 63: can't complete it twice"):
+        exchange.complete(Answer.fault(1), 6)
+    assert exchange.answer == Answer(0x3F)
+
+
+def test_the_message_interface_is_a_component_the_module_holds() -> None:
+    plc, mod = make()
+    assert isinstance(mod.exchanges, Exchanges)
+    tb = plc.start_exchange(m=M, c=0x0F, recv_bytes=27)
+    plc.advance(0.011)  # validated, held by the self-test
+    held = mod.exchanges.pending(0x63)
+    assert held is not None and mod.exchanges.held() == [held] and not tb.done
+    plc.advance(2.1)
+    assert tb.done and mod.exchanges.pending(0x63) is None

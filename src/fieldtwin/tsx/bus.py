@@ -5,7 +5,7 @@ from __future__ import annotations
 import enum
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Literal, Protocol
 
 from fieldtwin.clock import SimClock
 
@@ -37,6 +37,14 @@ class BusImage:
     fault: bool  # Ixy,S
 
 
+class Pacer(Protocol):
+    """What paces simulated time to the wall clock (fieldtwin.runtime.runner.Runner)."""
+
+    def advance(self, duration: int) -> None: ...
+
+    def run_until(self, predicate: Callable[[], bool], limit: int) -> bool: ...
+
+
 @dataclass(frozen=True, slots=True)
 class ModuleContext:
     """What the PLC gives a module it inserts."""
@@ -46,4 +54,4 @@ class ModuleContext:
     # Returns the PLC's fieldtwin.runtime.runner.Runner, creating it: call it when the
     # module wires a real endpoint (pty, serial, TCP), so that simulated time follows
     # the wall clock, also inside plc.advance and plc.exchange (SCM issue).
-    pace: Callable[[], Any] | None = None
+    pace: Callable[[], Pacer] | None = None

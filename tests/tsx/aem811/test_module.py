@@ -330,3 +330,13 @@ def test_plant_keys(tmp_path: Path) -> None:
         )
     with pytest.raises(ConfigError, match="unknown key"):
         mod.configure_from_plant({"colour": 1}, "module[0]", tmp_path)
+
+
+def test_4_4_3_footnote_other_word_reads_the_whole_configuration() -> None:
+    # AEM 4.4-3 (*): with a transmission length defined, a word other than H'XXCi'
+    # returns the whole configuration, V = H'71' (it answered H'FD' before)
+    plc, mod = ready()
+    r = plc.exchange(m=SYS, c=0x41, send=[0x1234], recv_bytes=68)
+    assert (r.v, r.e) == (0x71, False) and r.words == mod.config.words()
+    r = plc.exchange(m=SYS, c=0x41, send=[0xFFC7], recv_bytes=12)
+    assert r.v == 0x71 and r.words[2] == 0x00C7

@@ -6,6 +6,7 @@ import pytest
 
 from fieldtwin.clock import S
 from fieldtwin.errors import ConfigError
+from fieldtwin.tsx.plc import Plc
 from tests.tsx.dem24.helpers import (
     JULY_15_1994,
     SLOT,
@@ -177,7 +178,11 @@ def test_5_3_4_post_program_time_setting_from_the_w_table() -> None:
 
 def test_7_2_sync_output_drives_at_most_32_modules() -> None:
     plc, source = make()
-    followers = [plc.insert("TSX DEM 2412", rack=1 + k // 8, slot=k % 8) for k in range(33)]
+    # DEM 6.2-2: 32 time-stamping modules a PLC, so the followers are in two other PLCs
+    others = [Plc(clock=plc.clock), Plc(clock=plc.clock)]
+    followers = [
+        others[k // 32].insert("TSX DEM 2412", rack=k % 32 // 8, slot=k % 8) for k in range(33)
+    ]
     for follower in followers[:32]:
         source.connect_sync_output(follower)
     with pytest.raises(ConfigError, match="at most 32"):

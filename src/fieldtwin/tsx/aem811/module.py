@@ -74,10 +74,7 @@ class Aem811(IntelligentModule):
         self.cut = [False] * 8  # injected wire cuts (fault "open_N")
         self.relay_operations = [0] * 8
         self._startup: Any = None
-        self._reset_volatile()
-
-    def _reset_volatile(self) -> None:
-        # AEM 2.5-3: no protected memory; power-up restarts with the defaults
+        # the volatile memory (AEM 2.5-3): reset by _reset_volatile at power-up and off
         self.config: ModuleConfig = DEFAULT_CONFIG
         self.default_configuration = True
         self.rejection: Rejection | None = None
@@ -94,6 +91,25 @@ class Aem811(IntelligentModule):
         self._channel_faults = 0  # IWxy,1,8..F: live, not memorised
         self.run_started_at: int | None = None  # when acquisition last started
         self.pending_thresholds: Exchange | None = None
+
+    def _reset_volatile(self) -> None:
+        # AEM 2.5-3: no protected memory; power-up restarts with the defaults
+        self.config = DEFAULT_CONFIG
+        self.default_configuration = True
+        self.rejection = None
+        self.thresholds = ThresholdDetector()
+        self.values = [0] * 8
+        self.snapshot = [0] * 8
+        self.registers = [0] * 4
+        self.selector = 0
+        self.measurements = [None] * 8
+        self.hysteresis_values = [hysteresis(c) for c in self.config.channels]
+        self._acquiring = None
+        self._event = None
+        self._sequencer = None
+        self._channel_faults = 0
+        self.run_started_at = None
+        self.pending_thresholds = None
 
     # --- inputs (API names fixed: tests outside the project use them) ---------
 
