@@ -47,4 +47,4 @@ def test_the_tables_are_the_kernel_s() -> None:
     tb.machine.fire(TxtInput.START)
     tb.machine.fire(TxtInput.SUBMIT)
     tb.machine.fire(TxtInput.ANSWER, Answer(0x3F, b"V1"), 7)  # the action keeps the answer
-    assert (tb.state, tb.answer, tb.answered_at) == (TxtState.ANSWERED, Answer(0x3F, b"V1"), 7)
+    assert (tb.state, tb.answer, tb.answered_at_us) == (TxtState.ANSWERED, Answer(0x3F, b"V1"), 7)

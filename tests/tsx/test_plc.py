@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from fieldtwin.errors import ConfigError
@@ -370,3 +372,17 @@ def test_dem_6_2_2_at_most_32_time_stamping_modules_in_one_plc() -> None:
         plc.insert("TSX DEM 2412", rack=4, slot=0)
     plc.insert("TSX AEM 811", rack=4, slot=0)  # other kinds are not counted
     assert len(plc.modules) == 33
+
+
+def test_dem_6_2_2_limit_in_a_plant_file(tmp_path: Path) -> None:
+    from fieldtwin.plant import load_plant
+
+    places = [(rack, slot) for rack in range(8) for slot in range(8)][:33]
+    modules = "".join(
+        f'[[module]]\ntype = "TSX DEM 2412"\nrack = {rack}\nslot = {slot}\n\n'
+        for rack, slot in places
+    )
+    plant = tmp_path / "dems.toml"
+    plant.write_text('[plc]\nmodel = "TSX 87"\n\n' + modules)
+    with pytest.raises(ConfigError, match=r"module\[32\].*at most 32 time-stamping modules"):
+        load_plant(plant)

@@ -122,7 +122,7 @@ class TextBlock:
     send: bytes = b""
     capacity: int = 0
     answer: Answer | None = None
-    answered_at: int = 0
+    answered_at_us: int = 0
     result: ExchangeResult | None = None
     exchange: Exchange | None = field(default=None, repr=False)
     ticket: object = field(default=None, repr=False)
@@ -148,7 +148,7 @@ class TextBlock:
         return None if self.result is None else self.result.ended_at
 
     def _answered(self, answer: Answer, at: int) -> None:
-        self.answer, self.answered_at = answer, at
+        self.answer, self.answered_at_us = answer, at
 
 
 # The Text Block machine: every state change of a TextBlock is one of these pairs.
@@ -189,7 +189,7 @@ class TextBlocks:
     def end_of_task(self, now: int, running: bool) -> None:
         """Report the answers that came in, then validate the new requests."""
         for tb in self._txts.values():
-            if tb.state is TxtState.ANSWERED and tb.answered_at < now:
+            if tb.state is TxtState.ANSWERED and tb.answered_at_us < now:
                 self._finish(tb, TxtInput.REPORT, now)
         if running:
             for tb in self._txts.values():

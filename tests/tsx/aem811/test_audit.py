@@ -71,7 +71,7 @@ def test_stop_mid_acquisition_loses_the_slot_and_run_restarts_at_channel_0() -> 
     assert mod.iw[5] == 0 and mod.relay_operations[2] == 1
     plc.write("OW5,0,C", 1)
     plc.advance(0.02)
-    restart = mod.run_started_at
+    restart = mod.run_started_at_us
     assert restart is not None
     until(plc, at(restart, 299.999))
     assert mod.iw[5] == 0

@@ -340,3 +340,10 @@ def test_4_4_3_footnote_other_word_reads_the_whole_configuration() -> None:
     assert (r.v, r.e) == (0x71, False) and r.words == mod.config.words()
     r = plc.exchange(m=SYS, c=0x41, send=[0xFFC7], recv_bytes=12)
     assert r.v == 0x71 and r.words[2] == 0x00C7
+
+
+def test_run_started_at_in_seconds() -> None:
+    plc, mod = ready()
+    assert mod.run_started_at is None
+    started = run(plc, mod)
+    assert mod.run_started_at == started / 1e6 and mod.run_started_at_us == started

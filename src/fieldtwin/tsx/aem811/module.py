@@ -89,7 +89,7 @@ class Aem811(IntelligentModule):
         self._event: Handle | None = None
         self._sequencer: Sequencer | None = None
         self._channel_faults = 0  # IWxy,1,8..F: live, not memorised
-        self.run_started_at: int | None = None  # when acquisition last started
+        self.run_started_at_us: int | None = None  # when acquisition last started
         self.pending_thresholds: Exchange | None = None
 
     def _reset_volatile(self) -> None:
@@ -108,7 +108,7 @@ class Aem811(IntelligentModule):
         self._event = None
         self._sequencer = None
         self._channel_faults = 0
-        self.run_started_at = None
+        self.run_started_at_us = None
         self.pending_thresholds = None
 
     # --- inputs (API names fixed: tests outside the project use them) ---------
@@ -148,6 +148,11 @@ class Aem811(IntelligentModule):
             return None
         current = self.config.channels[channel].range.current
         return self.inputs[channel].millivolts(now, current)
+
+    @property
+    def run_started_at(self) -> float | None:
+        """Simulated seconds when acquisition last started (None in Stop)."""
+        return None if self.run_started_at_us is None else self.run_started_at_us / S
 
     # --- command words -------------------------------------------------------
 
@@ -208,9 +213,9 @@ class Aem811(IntelligentModule):
         self._acquiring = None
         if not running:  # AEM 4.1-2: the registers keep the last values
             self._sequencer = None
-            self.run_started_at = None
+            self.run_started_at_us = None
             return
-        self.run_started_at = now
+        self.run_started_at_us = now
         period = self.config.period * SLOT_US
         self._sequencer = Sequencer(period, self.accelerated, now)
         self._next_slot(now)
