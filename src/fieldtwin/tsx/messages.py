@@ -12,7 +12,7 @@ answers now or later with ``exchange.complete``.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from typing import Protocol
 
 from fieldtwin.tsx.bus import ModuleState
@@ -73,9 +73,6 @@ class Exchanges:
     def __init__(self, host: MessageHost) -> None:
         self._host = host
         self.by_key: dict[int, Exchange] = {}  # channel (00, 01, 63) or a module's own key
-
-    def __iter__(self) -> Iterator[Exchange]:
-        return iter(list(self.by_key.values()))
 
     def get(self, key: int) -> Exchange | None:
         return self.by_key.get(key)
