@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Protocol
 
 from fieldtwin.clock import Handle, S
 from fieldtwin.errors import ConfigError
@@ -36,6 +36,12 @@ from fieldtwin.words import set_bit
 ACCELERATED_BIT = 8  # OWxy,1,8
 DEFAULT_CONFIG_BIT = 0xD  # IWxy,2,D
 RELAY_LIFE = 300_000_000  # AEM 2.5-2, 8.2: 3 x 10^8 operations
+
+
+class Startup(Protocol):
+    """A plant file's configuration, applied when the initial self-test ends."""
+
+    def apply(self, mod: Aem811) -> None: ...
 
 
 @dataclass(frozen=True, slots=True)
@@ -73,7 +79,7 @@ class Aem811(IntelligentModule):
         self.inputs = [ChannelInput() for _ in range(8)]
         self.cut = [False] * 8  # injected wire cuts (fault "open_N")
         self.relay_operations = [0] * 8
-        self._startup: Any = None
+        self._startup: Startup | None = None
         # the volatile memory (AEM 2.5-3): reset by _reset_volatile at power-up and off
         self.config: ModuleConfig = DEFAULT_CONFIG
         self.default_configuration = True
@@ -354,7 +360,7 @@ class Aem811(IntelligentModule):
 
     # --- plant file and status -------------------------------------------------------
 
-    def schedule_startup(self, startup: Any) -> None:
+    def schedule_startup(self, startup: Startup) -> None:
         """Plant-file configuration: applied when the initial self-test ends."""
         if self.state is ModuleState.OPERATIONAL and not self.running:
             startup.apply(self)
