@@ -30,14 +30,14 @@ def render(plant: Plant, endpoints: list[str]) -> Group:
             table.add_column(col, no_wrap=col != "module")
         for module in plc.modules:
             image = plc.image(module.rack, module.slot)
-            leds = module.leds()
+            leds = module.leds
             table.add_row(
                 module.address,
                 module.type_name,
                 mode(module),
-                _led(leds.ok, "green"),
-                _led(leds.err, "red"),
-                _led(leds.f, "red"),
+                _led(leds.get("OK", "off") != "off", "green"),
+                _led(leds.get("ERR", "off") != "off", "red"),
+                _led(leds.get("F", "off") != "off", "red"),
                 str(int(image.fault)),
                 " ".join(f"{w:04X}" for w in image.iw),
                 f"{image.i_bits:016b}",
@@ -86,7 +86,7 @@ def plain_status(plant: Plant) -> list[str]:
             words = " ".join(format_hex(w) for w in image.iw)
             lines.append(
                 f"slot {module.address} {module.type_name}:"
-                f" {mode(module)} {module.leds()} IW {words}"
+                f" {mode(module)} {module.led_text} IW {words}"
             )
     for tes in plant.tes:
         lines.append(f"TES {tes.slave} {tes.model.name}: {tes_status(tes)}")

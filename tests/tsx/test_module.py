@@ -9,8 +9,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fieldtwin.errors import ConfigError, ProtocolError
-from fieldtwin.tsx.module import FaultCategory, Leds, ModuleEvent, ModuleState
+from fieldtwin.tsx.messages import Exchanges
+from fieldtwin.tsx.module import FaultCategory, ModuleEvent, ModuleState
 from fieldtwin.tsx.plc import Plc
+from fieldtwin.tsx.textblock import Answer, Exchange, Request
 from fieldtwin.tsx.txt import TxtState
 from tests.tsx.double import CONVERTER, DOUBLE, SENSOR, TERMINAL_BLOCK, Double
 
@@ -28,10 +30,10 @@ def test_initial_self_test_bits_and_leds() -> None:
     plc, mod = make()
     plc.advance(0.05)
     assert plc.read("IW5,0,9") == 1 and plc.read("IW5,0,3") == 0
-    assert mod.leds() == Leds(ok=True, err=True, f=False)
+    assert mod.leds == {"OK": "on", "ERR": "on", "F": "off"}
     plc.advance(2.0)
     assert plc.read("IW5,0,9") == 0 and plc.read("IW5,0,3") == 1
-    assert mod.leds() == Leds(ok=True, err=False, f=False)
+    assert mod.leds == {"OK": "on", "ERR": "off", "F": "off"}
     assert plc.read("I5,S") == 0
 
 
@@ -65,10 +67,10 @@ def test_application_fault_latches_until_the_fault_string_is_read() -> None:
     mod.inject_fault("sensor", True)
     plc.advance(0.02)
     assert (plc.read("IW5,0,4"), plc.read("IW5,0,7")) == (1, 1)
-    assert mod.leds().err and plc.read("I5,S") == 0 and mod.running  # keeps running
+    assert mod.leds["ERR"] == "on" and plc.read("I5,S") == 0 and mod.running  # keeps running
     mod.inject_fault("sensor", False)
     plc.advance(0.02)
-    assert plc.read("IW5,0,7") == 1 and not mod.leds().err  # memorised, LED live
+    assert plc.read("IW5,0,7") == 1 and mod.leds["ERR"] == "off"  # memorised, LED live
     r = plc.exchange(m=M, c=0x47, recv_bytes=8)
     assert r.v == 0x77 and r.s == 8 and r.data[SENSOR // 8] == 1 << (SENSOR % 8)
     plc.advance(0.02)
@@ -116,7 +118,7 @@ def test_module_fault_stops_the_module_and_sets_the_fault_bit() -> None:
     plc.advance(0.02)
     assert plc.read("IW5,0,C") == 0 and plc.read("I5,S") == 1
     assert plc.read("IW5,0,A") == 1 and plc.read("IW5,0,6") == 1
-    assert not mod.leds().ok
+    assert mod.leds["OK"] == "off"
     mod.inject_fault("terminal_block", False)
     plc.advance(0.02)
     assert plc.read("IW5,0,C") == 1 and plc.read("I5,S") == 0 and plc.read("IW5,0,A") == 0
@@ -130,7 +132,7 @@ def test_blocking_fault_takes_the_module_out_of_service() -> None:
     plc.advance(0.02)
     assert mod.state is ModuleState.BLOCKED
     assert plc.read("IW5,0,8") == 1 and plc.read("I5,S") == 1
-    assert mod.leds() == Leds(ok=False, err=False, f=True)
+    assert mod.leds == {"OK": "off", "ERR": "off", "F": "on"}
     r = plc.exchange(m=M, c=0x0F, recv_bytes=27)
     assert r.e and r.s == 4  # module fault
 
@@ -175,7 +177,7 @@ def test_removal_and_insertion_under_power() -> None:
     plc.remove(0, 5)
     plc.advance(0.02)
     assert plc.read("I5,S") == 1 and plc.read("IW5,0") == 0x0100  # bit 8: module absent
-    assert mod.leds() == Leds(False, False, False)
+    assert mod.leds == {"OK": "off", "ERR": "off", "F": "off"}
     plc.reinsert(0, 5)
     plc.advance(0.02)
     assert plc.read("IW5,0,9") == 1  # self-test again
@@ -224,7 +226,7 @@ def test_common_requests() -> None:
 def test_requests_during_self_test_are_held_until_it_ends() -> None:
     plc, mod = make()
     r = plc.exchange(m=M, c=0x0F, recv_bytes=27)
-    assert r.v == 0x3F and r.ended_at >= 2_000_000
+    assert r.v == 0x3F and r.ended_at_us >= 2_000_000
 
 
 def test_state_machine_rejects_an_impossible_event() -> None:
@@ -304,11 +306,17 @@ def _apply(plc: Plc, mod: Double, op: tuple[Any, ...]) -> None:
         plc.reset_text_block(op[1])
 
 
+def _panel(ok: bool, err: bool, f: bool) -> dict[str, str]:
+    return {name: "on" if lit else "off" for name, lit in (("OK", ok), ("ERR", err), ("F", f))}
+
+
 def _check_status_word(mod: Double) -> None:
     state, word = mod.state, mod.iw[0]
     bit = lambda n: bool(word >> n & 1)  # noqa: E731
     if state is ModuleState.OFF:
-        assert word == 0 and mod.leds() == Leds(False, False, False) and mod.module_fault
+        assert (
+            word == 0 and mod.leds == {"OK": "off", "ERR": "off", "F": "off"} and mod.module_fault
+        )
         return
     module_fault = mod._faults.any(FaultCategory.MODULE, memorised=False)
     application = mod._faults.any(FaultCategory.APPLICATION, memorised=False)
@@ -324,9 +332,9 @@ def _check_status_word(mod: Double) -> None:
     blocked = state is ModuleState.BLOCKED
     assert mod.module_fault == (blocked or module_fault)
     if state is ModuleState.OPERATIONAL:
-        assert mod.leds() == Leds(not module_fault, application, False)
+        assert mod.leds == _panel(not module_fault, application, False)
     else:
-        assert mod.leds() == (Leds(False, False, True) if blocked else Leds(True, True, False))
+        assert mod.leds == (_panel(False, False, True) if blocked else _panel(True, True, False))
 
 
 @settings(max_examples=150)
@@ -354,3 +362,23 @@ def test_any_sequence_of_events_ends_in_a_legal_state(ops: list[tuple[Any, ...]]
     plc.advance(0.02)
     _check_status_word(mod)
     assert plc.read("IW5,0") & 0x03D8 == 0x0008  # ready: no fault, no self-test
+
+
+def test_a_second_completion_of_an_exchange_raises() -> None:
+    # issue 9 item 4: it was silently ignored, which hid dead code in the AEM
+    exchange = Exchange(Request(0x0F, 0x63, b"", 27), 0, lambda e, at: None)
+    exchange.complete(Answer(0x3F), 5)
+    with pytest.raises(ProtocolError, match="C=0F channel 63: can't complete it twice"):
+        exchange.complete(Answer.fault(1), 6)
+    assert exchange.answer == Answer(0x3F)
+
+
+def test_the_message_interface_is_a_component_the_module_holds() -> None:
+    plc, mod = make()
+    assert isinstance(mod.exchanges, Exchanges)
+    tb = plc.start_exchange(m=M, c=0x0F, recv_bytes=27)
+    plc.advance(0.011)  # validated, held by the self-test
+    held = mod.exchanges.pending(0x63)
+    assert held is not None and mod.exchanges.held() == [held] and not tb.done
+    plc.advance(2.1)
+    assert tb.done and mod.exchanges.pending(0x63) is None

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from fieldtwin.errors import ConfigError
@@ -35,7 +37,7 @@ def test_immediate_answer_is_reported_one_cycle_after_validation(model: str) -> 
     assert not tb.done  # validated now, answered, not yet reported
     plc.advance(SCAN / 1e6)
     assert tb.done and tb.result is not None
-    assert tb.result.ended_at == validated + SCAN
+    assert tb.result.ended_at_us == validated + SCAN
     assert tb.result.report_name == MODELS[model].report_name
 
 
@@ -43,7 +45,7 @@ def test_late_answer_is_reported_at_the_first_cycle_end_after_it() -> None:
     plc, _ = make()
     r = plc.exchange(m=m_of(3), c=0x01, send=[0x1234, 0x5678], recv_bytes=4)
     assert r.words == [0x1234, 0x5678] and r.v == 0x81 and r.s == 4
-    assert r.ended_at % SCAN == 0
+    assert r.ended_at_us % SCAN == 0
 
 
 def test_report_is_R_on_a_47_20_and_V_elsewhere() -> None:
@@ -282,3 +284,105 @@ def test_bad_text_block_arguments_are_config_errors(kw: dict[str, int], message:
     plc, _ = make()
     with pytest.raises(ConfigError, match=message):
         plc.start_exchange(m=m_of(3), c=0x01, length=2, **kw)
+
+
+# --- the public API in seconds (issue 9 item 6) ------------------------------------
+
+
+def test_now_s_and_advance_to_absolute_simulated_time() -> None:
+    plc = Plc(scan_ms=10)
+    assert plc.now_s == 0.0
+    plc.advance_to(2.5)
+    assert plc.now_s == 2.5 and plc.now_us == 2_500_000 and plc.now == 2_500_000
+    plc.advance_to(2.5)  # already there: nothing happens
+    assert plc.cycles == 250
+    with pytest.raises(ConfigError, match=r"cannot advance to t = 1.0 s.*never goes back"):
+        plc.advance_to(1.0)
+    with pytest.raises(ConfigError, match="cannot advance to t = inf"):
+        plc.advance_to(float("inf"))
+    with pytest.raises(ConfigError, match="cannot advance by 1e\\+308 s"):
+        plc.advance(1e308)
+    assert plc.now_s == 2.5
+
+
+def test_read_signed_words() -> None:
+    plc, _ = make()
+    plc.write("OW3,2", 0xFF38)
+    plc.write("W7", 0x8000)
+    assert plc.read("OW3,2") == 0xFF38 and plc.read_signed("OW3,2") == -200
+    assert plc.read_signed("W7") == -32768 and plc.read_signed("IW3,5") == 0
+    plc.write("W7", 0x7FFF)
+    assert plc.read_signed("W7") == 32767
+    for name in ("I3,0", "IW3,0,3", "I3,S"):
+        with pytest.raises(ConfigError, match="is not a word: read_signed takes"):
+            plc.read_signed(name)
+
+
+def test_start_exchange_handle_done_result_ended_at_in_seconds() -> None:
+    plc, _ = make()
+    tb = plc.start_exchange(m=m_of(3), c=0x0F, recv_bytes=27)
+    assert not tb.done and tb.result is None and tb.ended_at is None
+    plc.advance(0.05)
+    assert tb.done and tb.result is not None and tb.result.v == 0x3F
+    assert tb.ended_at == tb.result.ended_at == tb.result.ended_at_us / 1e6
+    assert 2.1 < tb.ended_at <= plc.now_s and tb.ended_at * 1e6 % SCAN == 0
+
+
+def test_signed_words_on_exchange_results() -> None:
+    plc, _ = make()
+    plc.write("W200", 0xFF38)
+    plc.write("W201", 0x0064)
+    r = plc.exchange(m=m_of(3), c=0x01, table=200, length=4, recv_bytes=4)
+    assert r.words == [0xFF38, 0x0064] and r.signed_words == [-200, 100]
+
+
+def test_power_break_leaves_a_fresh_input_image_and_keeps_outputs_and_words() -> None:
+    # docs/objects.md: after power_break() the input image is read from the modules at
+    # power return (here: the self-test of a long break), outputs and W words kept
+    plc, mod = make()
+    plc.write("OW3,0,C", 1)
+    plc.write("W9", 1234)
+    plc.advance(0.02)
+    assert plc.read("IW3,0,3") == 1 and plc.read("IW3,0,9") == 0
+    plc.power_break(0.5)
+    assert plc.read("IW3,0,9") == 1 and plc.read("IW3,0,3") == 0  # fresh: in self-test
+    assert plc.read("OW3,0,C") == 1 and plc.read("W9") == 1234
+    plc.power_break(0.005)  # short: no restart, the image still fresh
+    assert plc.read("IW3,0,9") == 1
+
+
+def test_insert_and_module_return_the_module_and_module_as_checks_the_kind() -> None:
+    plc, mod = make()
+    assert plc.module(0, 3) is mod and plc.module_as(Double, 0, 3) is mod
+    from fieldtwin.tsx.aem811 import Aem811
+
+    with pytest.raises(ConfigError, match="rack 0 slot 3 holds a TEST DOUBLE, not a TSX AEM 811"):
+        plc.module_as(Aem811, 0, 3)
+    with pytest.raises(ConfigError, match="no module in rack 0 slot 4"):
+        plc.module(0, 4)
+
+
+def test_dem_6_2_2_at_most_32_time_stamping_modules_in_one_plc() -> None:
+    # DEM 6.2-2 note: "limited to 32 in a single PLC configuration", 2412 and 2413 alike
+    plc = Plc(model="TSX 87", scan_ms=10)
+    places = [(rack, slot) for rack in range(8) for slot in range(8)]
+    for i, (rack, slot) in enumerate(places[:32]):
+        plc.insert("TSX DEM 2412" if i % 2 else "TSX DEM 2413", rack=rack, slot=slot)
+    with pytest.raises(ConfigError, match=r"at most 32 time-stamping modules \(32 already"):
+        plc.insert("TSX DEM 2412", rack=4, slot=0)
+    plc.insert("TSX AEM 811", rack=4, slot=0)  # other kinds are not counted
+    assert len(plc.modules) == 33
+
+
+def test_dem_6_2_2_limit_in_a_plant_file(tmp_path: Path) -> None:
+    from fieldtwin.plant import load_plant
+
+    places = [(rack, slot) for rack in range(8) for slot in range(8)][:33]
+    modules = "".join(
+        f'[[module]]\ntype = "TSX DEM 2412"\nrack = {rack}\nslot = {slot}\n\n'
+        for rack, slot in places
+    )
+    plant = tmp_path / "dems.toml"
+    plant.write_text('[plc]\nmodel = "TSX 87"\n\n' + modules)
+    with pytest.raises(ConfigError, match=r"module\[32\].*at most 32 time-stamping modules"):
+        load_plant(plant)

@@ -5,9 +5,9 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from fieldtwin.tsx.plc import ExchangeResult, Plc
+    from fieldtwin.tsx.plc import ExchangeResult, ExchangeTimeout, Plc, TextBlock
 
-__all__ = ["ExchangeResult", "Plc"]
+__all__ = ["ExchangeResult", "ExchangeTimeout", "Plc", "TextBlock"]
 
 
 def __getattr__(name: str) -> Any:

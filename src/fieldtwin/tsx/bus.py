@@ -5,7 +5,7 @@ from __future__ import annotations
 import enum
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Literal, Protocol
 
 from fieldtwin.clock import SimClock
 
@@ -24,19 +24,8 @@ class ModuleEvent(enum.Enum):
     POWER_OFF = "power off"
 
 
-@dataclass(frozen=True, slots=True)
-class Leds:
-    """The front-panel LEDs as readable state."""
-
-    ok: bool
-    err: bool
-    f: bool
-
-    def __str__(self) -> str:
-        return " ".join(f"{n}={'on' if v else 'off'}" for n, v in self._asdict().items())
-
-    def _asdict(self) -> dict[str, bool]:
-        return {"OK": self.ok, "ERR": self.err, "F": self.f}
+# A front-panel LED: lit, dark or blinking
+LedState = Literal["on", "off", "blink"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -48,6 +37,14 @@ class BusImage:
     fault: bool  # Ixy,S
 
 
+class Pacer(Protocol):
+    """What paces simulated time to the wall clock (fieldtwin.runtime.runner.Runner)."""
+
+    def advance(self, duration: int) -> None: ...
+
+    def run_until(self, predicate: Callable[[], bool], limit: int) -> bool: ...
+
+
 @dataclass(frozen=True, slots=True)
 class ModuleContext:
     """What the PLC gives a module it inserts."""
@@ -57,4 +54,4 @@ class ModuleContext:
     # Returns the PLC's fieldtwin.runtime.runner.Runner, creating it: call it when the
     # module wires a real endpoint (pty, serial, TCP), so that simulated time follows
     # the wall clock, also inside plc.advance and plc.exchange (SCM issue).
-    pace: Callable[[], Any] | None = None
+    pace: Callable[[], Pacer] | None = None

@@ -24,10 +24,18 @@ from typing import Any, ClassVar
 from fieldtwin.clock import Handle as ClockHandle
 from fieldtwin.clock import S
 from fieldtwin.errors import ConfigError, ProtocolError
-from fieldtwin.tsx.bus import BusImage, Leds, ModuleContext, ModuleEvent, ModuleState
+from fieldtwin.fsm import Machine, Table
+from fieldtwin.tsx.bus import BusImage, LedState, ModuleContext, ModuleEvent, ModuleState
 from fieldtwin.tsx.faults import FaultCategory, FaultLatches
-from fieldtwin.tsx.messages import MessageInterface
-from fieldtwin.tsx.textblock import ERR_MODULE_FAULT, ERR_POWER_BREAK, V_ERROR, Answer, Exchange
+from fieldtwin.tsx.messages import Exchanges, OnDone
+from fieldtwin.tsx.textblock import (
+    ERR_MODULE_FAULT,
+    ERR_POWER_BREAK,
+    V_ERROR,
+    Answer,
+    Exchange,
+    Request,
+)
 from fieldtwin.words import get_bit, set_bit
 
 # IWxy,0 standard status word (AEM 4.4-1 and the quick reference)
@@ -47,7 +55,7 @@ CMD_RESET_EXCHANGE = 0x2  # message-system reset
 CMD_RUN = 0xC  # module Run/Stop
 
 
-class IntelligentModule(MessageInterface):
+class IntelligentModule:
     """Base of every intelligent module twin; subclasses add their function."""
 
     type_name: ClassVar[str] = "intelligent module"
@@ -62,6 +70,10 @@ class IntelligentModule(MessageInterface):
     discrete_outputs: ClassVar[int] = 0  # Oxy,0.. a module has
     # which terminal-block fault bit of the fault string drives IWxy,0,A (None: none)
     terminal_block_fault_bit: ClassVar[int | None] = None
+    # The LEDs of the front panel, as printed on it (AEM 4.4-1 "F", "OK", "ERR")
+    led_names: ClassVar[tuple[str, ...]] = ("OK", "ERR", "F")
+    # At most N modules of this group in one PLC configuration: (group name, N)
+    plc_limit: ClassVar[tuple[str, int] | None] = None
 
     def __init__(
         self, ctx: ModuleContext, rack: int, slot: int, *, declared_code: int | None = None
@@ -71,7 +83,9 @@ class IntelligentModule(MessageInterface):
         self.rack = rack
         self.slot = slot
         self.declared_code = declared_code
-        self.state = ModuleState.OFF
+        self._mode: Machine[ModuleState, ModuleEvent, IntelligentModule] = Machine(
+            MODES, ModuleState.OFF, self
+        )
         self.iw = [0] * 8  # written by the module, read by the PLC
         self.ow = [0] * 8  # written by the PLC
         self.i_bits = 0
@@ -79,7 +93,7 @@ class IntelligentModule(MessageInterface):
         self.awaiting_configuration = False
         self.app_name = b""
         self._faults = FaultLatches()
-        self._exchanges: dict[int, Exchange] = {}
+        self.exchanges = Exchanges(self)  # the message interface (AEM 2.4-4)
         self._handles: list[ClockHandle] = []
         self._self_test: ClockHandle | None = None
         self._hardware_faults: set[int] = set()  # found by the next initial self-test
@@ -108,37 +122,21 @@ class IntelligentModule(MessageInterface):
     def call_at(self, at: int, callback: Callable[[int], None]) -> ClockHandle:
         return self.call_later(at - self.clock.now, callback)
 
-    # --- the operating-mode machine (DESIGN rule 4) ------------------------
+    # --- the operating-mode machine (DESIGN rule 4: the MODES table below) --
 
-    _TRANSITIONS: ClassVar[dict[tuple[ModuleState, ModuleEvent], tuple[str, ModuleState]]] = {
-        (ModuleState.OFF, ModuleEvent.POWER_ON): ("_start_self_test", ModuleState.SELF_TEST),
-        (ModuleState.OFF, ModuleEvent.POWER_OFF): ("_noop", ModuleState.OFF),
-        (ModuleState.SELF_TEST, ModuleEvent.SELF_TEST_DONE): (
-            "_end_self_test",
-            ModuleState.OPERATIONAL,
-        ),
-        (ModuleState.SELF_TEST, ModuleEvent.BLOCKING_FAULT): ("_block", ModuleState.BLOCKED),
-        (ModuleState.SELF_TEST, ModuleEvent.POWER_OFF): ("_power_down", ModuleState.OFF),
-        (ModuleState.OPERATIONAL, ModuleEvent.BLOCKING_FAULT): ("_block", ModuleState.BLOCKED),
-        (ModuleState.OPERATIONAL, ModuleEvent.POWER_OFF): ("_power_down", ModuleState.OFF),
-        (ModuleState.BLOCKED, ModuleEvent.BLOCKING_FAULT): ("_noop", ModuleState.BLOCKED),
-        (ModuleState.BLOCKED, ModuleEvent.POWER_OFF): ("_power_down", ModuleState.OFF),
-    }
+    @property
+    def state(self) -> ModuleState:
+        """The operating mode: off, self-test, operational (Run or Stop) or blocked."""
+        return self._mode.state
 
     def _fire(self, event: ModuleEvent, now: int) -> None:
-        try:
-            action, target = self._TRANSITIONS[(self.state, event)]
-        except KeyError:
+        if not self._mode.can(event):
             raise ProtocolError(
                 f"{self.type_name} in slot {self.address}: can't handle {event.value!r}"
                 f" in state {self.state.value}"
-            ) from None
-        self.state = target
-        getattr(self, action)(now)
+            )
+        self._mode.fire(event, now)
         self.refresh_status()
-
-    def _noop(self, now: int) -> None:
-        pass
 
     def power_on(self, now: int | None = None) -> None:
         """Power-up, power return after a long break, or insertion under power."""
@@ -172,26 +170,22 @@ class IntelligentModule(MessageInterface):
         for bit in sorted(self._hardware_faults):
             self._set_latch(bit, True, self._fault_category(bit))
         self.on_self_test_done(now)
-        for exchange in list(self._exchanges.values()):
-            if not exchange.done:
-                self._dispatch(exchange, now)
+        self.exchanges.dispatch_held(now)
 
     def _block(self, now: int) -> None:
         if self._self_test is not None:  # AEM 7.1-1: a blocked module never becomes ready
             self._self_test.cancel()
         # SCM 6.4: a blocking fault "stops the user program from accessing the module
         # through the Text block": what the module held ends as a module fault.
-        for exchange in list(self._exchanges.values()):
-            exchange.complete(Answer.fault(ERR_MODULE_FAULT), now)
+        self.exchanges.end_all(Answer.fault(ERR_MODULE_FAULT), now)
         self.on_blocked(now)
 
     def _power_down(self, now: int) -> None:
         for handle in self._handles:
             handle.cancel()
         self._handles.clear()
-        for exchange in list(self._exchanges.values()):
-            exchange.complete(Answer.fault(ERR_POWER_BREAK), now)
-        self._exchanges.clear()
+        self.exchanges.end_all(Answer.fault(ERR_POWER_BREAK), now)
+        self.exchanges.clear()
         self.iw = [0] * 8
         self.i_bits = 0
         # an unpowered module holds no outputs: the first refresh after power return
@@ -332,16 +326,29 @@ class IntelligentModule(MessageInterface):
             return True
         return self._any(FaultCategory.MODULE, memorised=False)
 
-    def leds(self) -> Leds:
-        """OK / ERR / F (AEM 4.4-1 and 7.1-1)."""
+    @property
+    def leds(self) -> dict[str, LedState]:
+        """The front-panel LEDs, by the name printed on the panel: "on", "off" or
+        "blink"; only the LEDs this module's front panel has (``led_names``)."""
+        states = self.led_states()
+        return {name: states.get(name, "off") for name in self.led_names}
+
+    def led_states(self) -> dict[str, LedState]:
+        """OK / ERR / F (AEM 4.4-1 and 7.1-1, DEM 4.3); a subclass may add its own."""
         if self.state is ModuleState.OFF:
-            return Leds(False, False, False)
+            return _lit()
         if self.state is ModuleState.SELF_TEST:
-            return Leds(True, True, False)
+            return _lit("OK", "ERR")
         if self.state is ModuleState.BLOCKED:
-            return Leds(False, False, True)
+            return _lit("F")
         ok = not self._any(FaultCategory.MODULE, memorised=False)
-        return Leds(ok, self._any(FaultCategory.APPLICATION, memorised=False), False)
+        err = self._any(FaultCategory.APPLICATION, memorised=False)
+        return _lit(*(["OK"] if ok else []), *(["ERR"] if err else []))
+
+    @property
+    def led_text(self) -> str:
+        """The LEDs on one line: ``OK=on ERR=off F=off``."""
+        return " ".join(f"{name}={state}" for name, state in self.leds.items())
 
     # --- status word ---------------------------------------------------------
 
@@ -391,7 +398,34 @@ class IntelligentModule(MessageInterface):
     def bus_read(self) -> BusImage:
         return BusImage(tuple(self.iw), self.i_bits, self.module_fault)
 
-    # the message interface: fieldtwin.tsx.messages.MessageInterface
+    # --- the message interface (the Exchanges component, tsx/messages.py) -----
+
+    def submit(self, request: Request, now: int, on_done: OnDone) -> Exchange:
+        """The PLC validated a Text Block addressed to this module."""
+        return self.exchanges.submit(request, now, on_done)
+
+    def overridden_requests(self) -> frozenset[int]:
+        """Common request codes a subclass answers itself in handle_request."""
+        return frozenset()
+
+    def pending_exchange(self, channel: int) -> Exchange | None:
+        return self.exchanges.pending(channel)
+
+    def reset_exchanges(self, now: int, channel: int | None = None) -> None:
+        """Cancel exchanges in progress (OWxy,0,2, or a channel reset bit)."""
+        self.exchanges.reset(now, channel)
+
+    def cancel_exchange(self, exchange: Exchange, now: int) -> None:
+        """A Text Block's reset input cancels this one exchange."""
+        self.reset_exchanges(now, exchange.request.channel)
+
+    def on_exchange_cancelled(self, exchange: Exchange, now: int) -> None:
+        """An exchange is about to be cancelled: stop what it started."""
+
+    @property
+    def _exchanges(self) -> dict[int, Exchange]:
+        """The exchanges by key (a subclass holding one under its own key uses it)."""
+        return self.exchanges.by_key
 
     # --- status for people -------------------------------------------------
 
@@ -400,8 +434,8 @@ class IntelligentModule(MessageInterface):
         lines = {
             "module": f"{self.type_name} rack {self.rack} slot {self.slot}",
             "state": self.state.value,
-            "mode": "Run" if self.running else "Stop",
-            "leds": str(self.leds()),
+            **({"mode": "Run" if self.running else "Stop"} if self.has_run_stop else {}),
+            "leds": self.led_text,
             "fault (I,S)": str(int(self.module_fault)),
         }
         if not self.code_ok:
@@ -410,11 +444,40 @@ class IntelligentModule(MessageInterface):
         return lines
 
 
+def _lit(*names: str) -> dict[str, LedState]:
+    return {name: "on" if name in names else "off" for name in ("OK", "ERR", "F")}
+
+
+_M = IntelligentModule
+# The operating modes (AEM 2.5, 7.1-1; SCM 6.4): power-up runs the initial self-test,
+# which ends operational (Run/Stop by IWxy,0,C) or blocked; power off from anywhere.
+MODES: Table[ModuleState, ModuleEvent] = Table(
+    "module modes",
+    ModuleState,
+    ModuleEvent,
+    {
+        (ModuleState.OFF, ModuleEvent.POWER_ON): (_M._start_self_test, ModuleState.SELF_TEST),
+        (ModuleState.OFF, ModuleEvent.POWER_OFF): (None, ModuleState.OFF),
+        (ModuleState.SELF_TEST, ModuleEvent.SELF_TEST_DONE): (
+            _M._end_self_test,
+            ModuleState.OPERATIONAL,
+        ),
+        (ModuleState.SELF_TEST, ModuleEvent.BLOCKING_FAULT): (_M._block, ModuleState.BLOCKED),
+        (ModuleState.SELF_TEST, ModuleEvent.POWER_OFF): (_M._power_down, ModuleState.OFF),
+        (ModuleState.OPERATIONAL, ModuleEvent.BLOCKING_FAULT): (_M._block, ModuleState.BLOCKED),
+        (ModuleState.OPERATIONAL, ModuleEvent.POWER_OFF): (_M._power_down, ModuleState.OFF),
+        (ModuleState.BLOCKED, ModuleEvent.BLOCKING_FAULT): (None, ModuleState.BLOCKED),
+        (ModuleState.BLOCKED, ModuleEvent.POWER_OFF): (_M._power_down, ModuleState.OFF),
+    },
+)
+
+
 __all__ = [
+    "MODES",
     "BusImage",
     "FaultCategory",
     "IntelligentModule",
-    "Leds",
+    "LedState",
     "ModuleContext",
     "ModuleEvent",
     "ModuleState",

@@ -13,12 +13,13 @@ from __future__ import annotations
 import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TypeVar
 
-from fieldtwin.clock import MS, Handle, SimClock, seconds
+from fieldtwin.clock import MS, Handle, S, SimClock, seconds
 from fieldtwin.errors import ConfigError
 from fieldtwin.tsx import registry
 from fieldtwin.tsx.addressing import ObjectKind, ObjectRef, parse_object
+from fieldtwin.tsx.bus import Pacer
 from fieldtwin.tsx.module import BusImage, IntelligentModule, ModuleContext
 from fieldtwin.tsx.textblock import ERR_MODULE_FAULT, ERR_POWER_BREAK
 from fieldtwin.tsx.txt import (
@@ -32,8 +33,12 @@ from fieldtwin.words import (
     format_hex,
     get_bit,
     set_bit,
+    to_signed,
     to_unsigned,
 )
+
+M = TypeVar("M", bound=IntelligentModule)
+ModuleOption = bool | int | float | str  # a module's own constructor option (quantize...)
 
 
 @dataclass(frozen=True, slots=True)
@@ -80,7 +85,7 @@ class Plc:
         scan_ms: float = 10,
         *,
         clock: SimClock | None = None,
-        runner: Any = None,
+        runner: Pacer | None = None,
         speed: float | None = 1.0,
     ) -> None:
         if model not in MODELS:
@@ -109,13 +114,15 @@ class Plc:
         slot: int = 0,
         *,
         code: int | None = None,
-        **options: Any,
-    ) -> Any:
+        **options: ModuleOption,
+    ) -> IntelligentModule:
         """Put a module in a slot, powered; returns the module object."""
-        cls = registry.module_class(type_name)
+        cls: type[IntelligentModule] = registry.module_class(type_name)
         self._check_slot(rack, slot)
+        self._check_limit(cls)
+        make: Callable[..., IntelligentModule] = cls
         ctx = ModuleContext(self.clock, self.model.name, self._enable_pacing)
-        module = cls(ctx, rack, slot, declared_code=code, **options)
+        module = make(ctx, rack, slot, declared_code=code, **options)
         self._slots[(rack, slot)] = _Slot(module)
         module.power_on()
         return module
@@ -140,11 +147,31 @@ class Plc:
                 f" {self.model.basic_rack_max} intelligent modules"
             )
 
-    def module(self, rack: int, slot: int) -> Any:
-        try:
-            return self._slots[(rack, slot)].module
-        except KeyError:
-            raise ConfigError(f"no module in rack {rack} slot {slot}") from None
+    def _check_limit(self, cls: type[IntelligentModule]) -> None:
+        """A per-kind limit of the configuration (DEM 6.2-2: 32 time-stamping modules)."""
+        limit = cls.plc_limit
+        if limit is None:
+            return
+        group, most = limit
+        count = sum(1 for s in self._slots.values() if s.module.plc_limit == limit)
+        if count >= most:
+            raise ConfigError(
+                f"{cls.type_name}: a PLC configuration takes at most {most} {group}"
+                f" ({count} already inserted)"
+            )
+
+    def module(self, rack: int, slot: int) -> IntelligentModule:
+        """The module in a slot (ConfigError naming the slot if there is none)."""
+        return self._entry(rack, slot).module
+
+    def module_as(self, cls: type[M], rack: int, slot: int) -> M:
+        """The module in a slot as its own class (ConfigError if it is another kind)."""
+        module = self.module(rack, slot)
+        if not isinstance(module, cls):
+            raise ConfigError(
+                f"rack {rack} slot {slot} holds a {module.type_name}, not a {cls.type_name}"
+            )
+        return module
 
     @property
     def modules(self) -> list[IntelligentModule]:
@@ -173,7 +200,7 @@ class Plc:
 
     # --- time ------------------------------------------------------------------
 
-    def _enable_pacing(self) -> Any:
+    def _enable_pacing(self) -> Pacer:
         """A module wired a real endpoint: time now follows the wall clock."""
         if self.runner is None:
             from fieldtwin.runtime.runner import Runner  # the only bridge to the OS
@@ -183,9 +210,18 @@ class Plc:
 
     def advance(self, duration_s: float) -> None:
         """Run the simulation for ``duration_s`` simulated seconds."""
-        if duration_s < 0:
-            raise ConfigError(f"cannot advance by a negative time ({duration_s} s)")
+        if not 0 <= duration_s * S < float("inf"):
+            raise ConfigError(f"cannot advance by {duration_s} s (allowed 0 or more seconds)")
         self._advance_us(seconds(duration_s))
+
+    def advance_to(self, t_s: float) -> None:
+        """Run the simulation until simulated time ``t_s`` (seconds since the start)."""
+        if not t_s * S < float("inf") or seconds(t_s) < self.clock.now:
+            raise ConfigError(
+                f"cannot advance to t = {t_s} s: simulated time is already"
+                f" {self.now_s:.6f} s and never goes back"
+            )
+        self._advance_us(seconds(t_s) - self.clock.now)
 
     def _advance_us(self, duration: int) -> None:
         if self.runner is not None:
@@ -207,7 +243,18 @@ class Plc:
 
     @property
     def now(self) -> int:
+        """Simulated time in microseconds (the same as ``now_us``)."""
         return self.clock.now
+
+    @property
+    def now_us(self) -> int:
+        """Simulated time in integer microseconds."""
+        return self.clock.now
+
+    @property
+    def now_s(self) -> float:
+        """Simulated time in seconds since the PLC's clock started."""
+        return self.clock.now / S
 
     # --- the master task and the bus ------------------------------------------
 
@@ -264,7 +311,7 @@ class Plc:
 
     def power_break(self, duration_s: float) -> None:
         """Cut the PLC supply for ``duration_s`` (simulated)."""
-        if not 0 <= duration_s < float("inf"):
+        if not 0 <= duration_s * S < float("inf"):
             raise ConfigError(f"power break of {duration_s} s not allowed (allowed 0 or more)")
         duration = seconds(duration_s)
         long_break = duration > POWER_RESERVE_US
@@ -281,6 +328,14 @@ class Plc:
         if long_break:
             for entry in present:
                 entry.module.power_on()
+        self._read_inputs()
+
+    def _read_inputs(self) -> None:
+        """Power return: the input image is read again from the modules at once, so
+        that it shows what they do now (a self-test after a long break), not what they
+        did before the break.  The output image and the internal words are kept."""
+        for entry in self._slots.values():
+            entry.image = entry.module.bus_read() if entry.present else ABSENT
 
     def _end_exchanges(self, code: int) -> None:
         self.txt.end_all(code, self.clock.now)
@@ -302,6 +357,15 @@ class Plc:
             return get_bit(entry.o_bits, _index(ref))
         word = entry.image.iw[_index(ref)] if ref.kind is ObjectKind.IW else entry.ow[_index(ref)]
         return get_bit(word, ref.bit) if ref.bit is not None else word
+
+    def read_signed(self, name: str) -> int:
+        """A word (IWxy,i, OWxy,i or Wi) as a signed 16-bit integer: -32768..32767."""
+        w = self._w_address(name)
+        if w is None:
+            ref = parse_object(name)
+            if ref.kind not in (ObjectKind.IW, ObjectKind.OW) or ref.bit is not None:
+                raise ConfigError(f"{name!r} is not a word: read_signed takes IWxy,i, OWxy,i or Wi")
+        return to_signed(self.read(name))
 
     def write(self, name: str, value: int) -> None:
         """Write an output object (OWxy,i / OWxy,i,j / Oxy,i) or an internal word Wi."""
@@ -350,10 +414,38 @@ class Plc:
         return self.txt.block(index)
 
     def start_exchange(
-        self, m: int, c: int, send: Sequence[int] | None = None, **kw: Any
+        self,
+        m: int,
+        c: int,
+        send: Sequence[int] | None = None,
+        *,
+        send_bytes: bytes | None = None,
+        length: int | None = None,
+        recv_bytes: int = 0,
+        txt: int = 0,
+        table: int | None = None,
+        indirect: int | None = None,
+        recv_table: int | None = None,
     ) -> TextBlock:
-        """Set a Text Block's inputs and start it: see TextBlocks.start."""
-        return self.txt.start(m, c, send, **kw)
+        """Set a Text Block's inputs and start it (see TextBlocks.start); no waiting.
+
+        Returns the Text Block as the exchange's handle: ``done`` (TXTi,D),
+        ``result`` (an ExchangeResult once done, else None) and ``ended_at``
+        (simulated seconds when it ended, else None).  It is validated at the end
+        of the master task; advance time (``advance``, ``advance_to``) to see it end.
+        """
+        return self.txt.start(
+            m,
+            c,
+            send,
+            send_bytes=send_bytes,
+            length=length,
+            recv_bytes=recv_bytes,
+            txt=txt,
+            table=table,
+            indirect=indirect,
+            recv_table=recv_table,
+        )
 
     def reset_text_block(self, txt: int) -> None:
         """The Text Block's R input: the exchange in progress ends with TXTi,S = 1."""
@@ -366,13 +458,28 @@ class Plc:
         send: Sequence[int] | None = None,
         *,
         timeout_s: float = 1200.0,
-        **kw: Any,
+        send_bytes: bytes | None = None,
+        length: int | None = None,
+        recv_bytes: int = 0,
+        txt: int = 0,
+        table: int | None = None,
+        indirect: int | None = None,
+        recv_table: int | None = None,
     ) -> ExchangeResult:
-        """Start a Text Block exchange and run the simulation until it ends (bounded).
-
-        Keywords: send_bytes, length, recv_bytes, txt, table, indirect, recv_table.
-        """
-        tb = self.txt.start(m, c, send, **kw)
+        """Start a Text Block exchange and run the simulation until it ends (bounded
+        by ``timeout_s`` simulated seconds: ExchangeTimeout); keywords as start_exchange."""
+        tb = self.start_exchange(
+            m,
+            c,
+            send,
+            send_bytes=send_bytes,
+            length=length,
+            recv_bytes=recv_bytes,
+            txt=txt,
+            table=table,
+            indirect=indirect,
+            recv_table=recv_table,
+        )
         if not self._run_until(lambda: tb.done, seconds(timeout_s)) or tb.result is None:
             raise ExchangeTimeout(
                 f"TXT{tb.index} (M={format_hex(m)}, C={format_hex(c, 2)}) not ended after"

@@ -13,6 +13,7 @@ import enum
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from fieldtwin.errors import ProtocolError
 from fieldtwin.words import bytes_to_words
 
 # SCM 4.5: the TXTi,S error codes at the end of an incorrect exchange (TXTi,E = 1)
@@ -92,9 +93,13 @@ class Exchange:
         return self.state is ExchangeState.DONE
 
     def complete(self, answer: Answer, now: int) -> None:
-        """End the exchange; a second completion is ignored (a cancel raced it)."""
+        """End the exchange; a second completion is a ProtocolError (it would hide a
+        module answering an exchange that is already over)."""
         if self.state is ExchangeState.DONE:
-            return
+            raise ProtocolError(
+                f"exchange C={self.request.code:02X} channel {self.request.channel:02X}:"
+                f" can't complete it twice (first answer {self.answer})"
+            )
         self.state = ExchangeState.DONE
         self.answer = answer
         self._on_done(self, now)

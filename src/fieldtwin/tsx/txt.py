@@ -13,7 +13,9 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
+from fieldtwin.clock import S
 from fieldtwin.errors import ConfigError, FieldtwinError
+from fieldtwin.fsm import Machine, Table
 from fieldtwin.tsx.bus import ModuleState
 from fieldtwin.tsx.textblock import (
     ERR_CANCELLED,
@@ -28,7 +30,7 @@ from fieldtwin.tsx.textblock import (
     Exchange,
     Request,
 )
-from fieldtwin.words import bytes_to_words, format_hex, words_to_bytes
+from fieldtwin.words import bytes_to_words, format_hex, to_signed, words_to_bytes
 
 if TYPE_CHECKING:
     from fieldtwin.tsx.module import IntelligentModule
@@ -52,7 +54,12 @@ class ExchangeResult:
     e: bool  # TXTi,E: incorrect exchange
     data: bytes
     report_name: str = "V"
-    ended_at: int = 0
+    ended_at_us: int = 0  # simulated microseconds when the report was set
+
+    @property
+    def ended_at(self) -> float:
+        """Simulated seconds when the report was set (the end of a PLC cycle)."""
+        return self.ended_at_us / S
 
     @property
     def r(self) -> int:
@@ -65,6 +72,11 @@ class ExchangeResult:
     @property
     def words(self) -> list[int]:
         return bytes_to_words(self.data)
+
+    @property
+    def signed_words(self) -> list[int]:
+        """The received words as signed 16-bit integers (measurements below 0)."""
+        return [to_signed(w) for w in self.words]
 
     @property
     def error_text(self) -> str | None:
@@ -86,28 +98,76 @@ class TxtState(enum.Enum):
     DONE = "done"
 
 
+class TxtInput(enum.Enum):
+    START = "start"  # the program set the inputs and started the block
+    REFUSE = "refuse"  # validation ended it with a system error (TXTi,S = 2, 4, 5, 10)
+    SUBMIT = "submit"  # validated at the end of the master task, handed to the module
+    ANSWER = "answer"  # the module answered (or ended the exchange)
+    REPORT = "report"  # outputs D, E, V/R, S set at the end of a cycle
+    END = "end"  # reset, power break, cold restart, module pulled: ended at once
+
+
 @dataclass(slots=True)
 class TextBlock:
-    """A CPL Text Block: inputs M, C, L and the tables; outputs D, E, V/R, S."""
+    """A CPL Text Block: inputs M, C, L and the tables; outputs D, E, V/R, S.
+
+    It is also the handle ``plc.start_exchange`` returns: ``done`` (TXTi,D),
+    ``result`` (the :class:`ExchangeResult`, None before the end) and ``ended_at``
+    (simulated seconds when it ended, None before).
+    """
 
     index: int
     m: int = 0
     c: int = 0
     send: bytes = b""
     capacity: int = 0
-    state: TxtState = TxtState.IDLE
     answer: Answer | None = None
-    answered_at: int = 0
+    answered_at_us: int = 0
     result: ExchangeResult | None = None
     exchange: Exchange | None = field(default=None, repr=False)
     ticket: object = field(default=None, repr=False)
     table: int | None = None
     indirect: int | None = None
     recv_table: int | None = None
+    machine: Machine[TxtState, TxtInput, TextBlock] = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        self.machine = Machine(TXT, TxtState.IDLE, self)
+
+    @property
+    def state(self) -> TxtState:
+        return self.machine.state
 
     @property
     def done(self) -> bool:
         return self.state is TxtState.DONE
+
+    @property
+    def ended_at(self) -> float | None:
+        """Simulated seconds when the exchange ended (its report set), None before."""
+        return None if self.result is None else self.result.ended_at
+
+    def _answered(self, answer: Answer, at: int) -> None:
+        self.answer, self.answered_at_us = answer, at
+
+
+# The Text Block machine: every state change of a TextBlock is one of these pairs.
+TXT: Table[TxtState, TxtInput] = Table(
+    "text block",
+    TxtState,
+    TxtInput,
+    {
+        (TxtState.IDLE, TxtInput.START): (None, TxtState.STARTED),
+        (TxtState.DONE, TxtInput.START): (None, TxtState.STARTED),
+        (TxtState.STARTED, TxtInput.REFUSE): (TextBlock._answered, TxtState.ANSWERED),
+        (TxtState.STARTED, TxtInput.SUBMIT): (None, TxtState.IN_MODULE),
+        (TxtState.IN_MODULE, TxtInput.ANSWER): (TextBlock._answered, TxtState.ANSWERED),
+        (TxtState.ANSWERED, TxtInput.REPORT): (None, TxtState.DONE),
+        (TxtState.STARTED, TxtInput.END): (None, TxtState.DONE),
+        (TxtState.IN_MODULE, TxtInput.END): (None, TxtState.DONE),
+        (TxtState.ANSWERED, TxtInput.END): (None, TxtState.DONE),
+    },
+)
 
 
 _BUSY = (TxtState.STARTED, TxtState.IN_MODULE, TxtState.ANSWERED)
@@ -129,8 +189,8 @@ class TextBlocks:
     def end_of_task(self, now: int, running: bool) -> None:
         """Report the answers that came in, then validate the new requests."""
         for tb in self._txts.values():
-            if tb.state is TxtState.ANSWERED and tb.answered_at < now:
-                self._finish(tb, now)
+            if tb.state is TxtState.ANSWERED and tb.answered_at_us < now:
+                self._finish(tb, TxtInput.REPORT, now)
         if running:
             for tb in self._txts.values():
                 if tb.state is TxtState.STARTED:
@@ -152,7 +212,7 @@ class TextBlocks:
             if found is not None and not tb.exchange.done:
                 found[0].cancel_exchange(tb.exchange, now)
         tb.answer = answer
-        self._finish(tb, now)
+        self._finish(tb, TxtInput.END, now)
 
     def start(
         self,
@@ -191,7 +251,8 @@ class TextBlocks:
                 raise ConfigError(f"TXT{txt},L = {length} but the table holds {len(data)} bytes")
             data = data[:length]
         tb.m, tb.c, tb.send, tb.capacity = m & 0xFFFF, c & 0xFF, data, recv_bytes
-        tb.state, tb.answer, tb.result, tb.exchange = TxtState.STARTED, None, None, None
+        tb.answer, tb.result, tb.exchange = None, None, None
+        tb.machine.fire(TxtInput.START)
         return tb
 
     def _table_words(
@@ -216,36 +277,38 @@ class TextBlocks:
             self._end(tb, Answer.fault(ERR_CANCELLED), now)
 
     def _validate(self, tb: TextBlock, now: int) -> None:
-        table_max = self.table_max
-        if tb.indirect is not None and self._resolve_table(None, tb.indirect) is None:
-            tb.answer, tb.answered_at, tb.state = Answer.fault(ERR_INDIRECT), now, TxtState.ANSWERED
+        refusal = self._refusal(tb)
+        if refusal is not None:
+            tb.machine.fire(TxtInput.REFUSE, Answer.fault(refusal), now)
             return
-        if len(tb.send) > table_max or tb.capacity > table_max:
-            tb.answer = Answer.fault(ERR_TABLE_LENGTH)
-            tb.answered_at = now
-            tb.state = TxtState.ANSWERED
-            return
-        channel = tb.m & 0xFF
         found = self._lookup(tb.m)
-        if found is None or channel not in (0x00, 0x01, MODULE_SYSTEM):
-            tb.answer = Answer.fault(ERR_PARAMETER)
-        elif not found[1] or found[0].state is ModuleState.OFF:
-            tb.answer = Answer.fault(ERR_MODULE_FAULT)
-        if tb.answer is not None or found is None:
-            tb.answered_at = now
-            tb.state = TxtState.ANSWERED
-            return
+        assert found is not None
         module = found[0]
-        tb.state = TxtState.IN_MODULE
+        tb.machine.fire(TxtInput.SUBMIT)
         ticket = tb.ticket = object()
 
         def done(exchange: Exchange, at: int) -> None:
             if tb.ticket is ticket and tb.state is TxtState.IN_MODULE:
-                tb.answer, tb.answered_at, tb.state = exchange.answer, at, TxtState.ANSWERED
+                assert exchange.answer is not None
+                tb.machine.fire(TxtInput.ANSWER, exchange.answer, at)
 
-        tb.exchange = module.submit(Request(tb.c, channel, tb.send, tb.capacity), now, done)
+        request = Request(tb.c, tb.m & 0xFF, tb.send, tb.capacity)
+        tb.exchange = module.submit(request, now, done)
 
-    def _finish(self, tb: TextBlock, now: int) -> None:
+    def _refusal(self, tb: TextBlock) -> int | None:
+        """The system error that ends ``tb`` at validation (SCM 4.5), None if it goes."""
+        if tb.indirect is not None and self._resolve_table(None, tb.indirect) is None:
+            return ERR_INDIRECT
+        if len(tb.send) > self.table_max or tb.capacity > self.table_max:
+            return ERR_TABLE_LENGTH
+        found = self._lookup(tb.m)
+        if found is None or tb.m & 0xFF not in (0x00, 0x01, MODULE_SYSTEM):
+            return ERR_PARAMETER
+        if not found[1] or found[0].state is ModuleState.OFF:
+            return ERR_MODULE_FAULT
+        return None
+
+    def _finish(self, tb: TextBlock, event: TxtInput, now: int) -> None:
         answer = tb.answer or Answer.fault(ERR_MODULE_FAULT)
         name = self.report_name
         if answer.error is not None:
@@ -262,7 +325,7 @@ class TextBlocks:
                 end = min(start + len(words), DATA_WORDS)
                 self.data[start:end] = words[: end - start]
         tb.result = result
-        tb.state = TxtState.DONE
+        tb.machine.fire(event)
 
 
 def _slot_of(m: int) -> tuple[int, int]:

@@ -53,8 +53,8 @@ def run(plc: Plc, mod: Aem811) -> int:
     """OWxy,0,C = 1 and run until the module is in Run; returns the Run time (us)."""
     plc.write("OW5,0,C", 1)
     plc.advance(0.02)
-    assert mod.running and mod.run_started_at is not None
-    return mod.run_started_at
+    assert mod.running and mod.run_started_at_us is not None
+    return mod.run_started_at_us
 
 
 def until(plc: Plc, at_us: int) -> None:

@@ -71,7 +71,7 @@ def test_stop_mid_acquisition_loses_the_slot_and_run_restarts_at_channel_0() -> 
     assert mod.iw[5] == 0 and mod.relay_operations[2] == 1
     plc.write("OW5,0,C", 1)
     plc.advance(0.02)
-    restart = mod.run_started_at
+    restart = mod.run_started_at_us
     assert restart is not None
     until(plc, at(restart, 299.999))
     assert mod.iw[5] == 0
@@ -164,7 +164,7 @@ def test_2_3_4_open_input_reads_ehl_and_the_thresholds_see_it() -> None:
     mod.set_input(0, open_circuit=True)
     plc.advance(2.5)
     assert plc.read("IW5,3") == RANGES[2].ehl and plc.read("I5,8") == 1
-    assert plc.read("IW5,1,8") == 1 and mod.leds().err
+    assert plc.read("IW5,1,8") == 1 and mod.leds["ERR"] == "on"
 
 
 def test_0_20_ma_open_line_is_a_zero_current() -> None:

@@ -175,8 +175,12 @@ def test_4_4_3_read_configuration() -> None:
     one = read_configuration(cfg, words_to_bytes([0x00C3]), 12)
     assert one == [0x00A0, 30, 0x00C3, 0x80C0, 5000, 0]
     assert read_configuration(cfg, words_to_bytes([0x12C1]), 12) == [0x00A0, 30, 0x00C1, 0x40B0]
-    assert read_configuration(cfg, words_to_bytes([0x00C8]), 12) is None
-    assert read_configuration(cfg, bytes(4), 12) is None
+    # AEM 4.4-3 footnote (*): a first word other than H'XXC0'..H'XXC7' asks for the
+    # complete configuration (zone 1 only when the reception table cannot hold it)
+    assert read_configuration(cfg, words_to_bytes([0x00C8]), 12) == [0x00A0, 30]
+    assert read_configuration(cfg, bytes(4), 68) == full
+    assert read_configuration(cfg, words_to_bytes([0x00B0, 0x00C1]), 68) == full
+    assert read_configuration(cfg, b"\xc1", 68) == full  # one byte is not a word
 
 
 channel_configs = st.builds(

@@ -8,7 +8,6 @@ import pytest
 
 from fieldtwin.errors import ConfigError
 from fieldtwin.tsx.aem811.faults import describe
-from fieldtwin.tsx.module import Leds
 from tests.tsx.aem811.helpers import CHN, SYS, at, configure, make, ready, run, until, words
 
 
@@ -16,7 +15,7 @@ def test_7_1_1_initial_self_test_and_default_configuration() -> None:
     plc, mod = make()
     plc.advance(9.9)
     assert plc.read("IW5,0,9") == 1 and plc.read("IW5,0,3") == 0
-    assert mod.leds() == Leds(ok=True, err=True, f=False)
+    assert mod.leds == {"OK": "on", "ERR": "on", "F": "off"}
     plc.advance(0.2)
     assert plc.read("IW5,0,9") == 0 and plc.read("IW5,0,3") == 1
     assert plc.read("IW5,2,D") == 1 and plc.read("IW5,0,B") == 0  # AEM 3.3
@@ -141,7 +140,7 @@ def test_4_4_1_continuity_fault_and_fault_string() -> None:
     plc.advance(0.45)
     assert plc.read("IW5,6") == 11000 and plc.read("IW5,2,3") == 0  # AEM 2.3-4: EHL
     assert plc.read("IW5,1,B") == 1 and plc.read("IW5,0,7") == 1 and plc.read("IW5,0,4") == 1
-    assert mod.leds().err and plc.read("I5,S") == 0 and plc.read("IW5,0,C") == 1
+    assert mod.leds["ERR"] == "on" and plc.read("I5,S") == 0 and plc.read("IW5,0,C") == 1
     r = plc.exchange(m=SYS, c=0x47, recv_bytes=10)
     assert (r.v, r.s) == (0x77, 8)  # AMB-AEM-05: 8 bytes
     assert describe(r.data) == ["channel 3 continuity"]
@@ -190,7 +189,7 @@ def test_7_1_2_module_faults_stop_the_module(name: str, bit: int) -> None:
     run(plc, mod)
     mod.inject_fault(name, True)
     plc.advance(0.05)
-    assert plc.read("IW5,0,C") == 0 and plc.read("I5,S") == 1 and not mod.leds().ok
+    assert plc.read("IW5,0,C") == 0 and plc.read("I5,S") == 1 and mod.leds["OK"] == "off"
     assert plc.read("IW5,0,6") == 1 and plc.read("IW5,0,A") == int(name == "terminal_block")
     ops = sum(mod.relay_operations)
     plc.advance(2)
@@ -220,7 +219,7 @@ def test_blocking_fault() -> None:
     plc, mod = ready()
     mod.inject_fault("processor", True)
     plc.advance(0.05)
-    assert plc.read("IW5,0,8") == 1 and mod.leds() == Leds(False, False, True)
+    assert plc.read("IW5,0,8") == 1 and mod.leds == {"OK": "off", "ERR": "off", "F": "on"}
     r = plc.exchange(m=SYS, c=0x0F, recv_bytes=27)
     assert r.e and r.s == 4
 
@@ -331,3 +330,20 @@ def test_plant_keys(tmp_path: Path) -> None:
         )
     with pytest.raises(ConfigError, match="unknown key"):
         mod.configure_from_plant({"colour": 1}, "module[0]", tmp_path)
+
+
+def test_4_4_3_footnote_other_word_reads_the_whole_configuration() -> None:
+    # AEM 4.4-3 (*): with a transmission length defined, a word other than H'XXCi'
+    # returns the whole configuration, V = H'71' (it answered H'FD' before)
+    plc, mod = ready()
+    r = plc.exchange(m=SYS, c=0x41, send=[0x1234], recv_bytes=68)
+    assert (r.v, r.e) == (0x71, False) and r.words == mod.config.words()
+    r = plc.exchange(m=SYS, c=0x41, send=[0xFFC7], recv_bytes=12)
+    assert r.v == 0x71 and r.words[2] == 0x00C7
+
+
+def test_run_started_at_in_seconds() -> None:
+    plc, mod = ready()
+    assert mod.run_started_at is None
+    started = run(plc, mod)
+    assert mod.run_started_at == started / 1e6 and mod.run_started_at_us == started

@@ -130,7 +130,7 @@ def test_5_1_sensor_faults_through_the_fault_bit_string() -> None:
     sr2(plc, w, 3.2)
     assert plc.read("IW5,1,A") == 1 and plc.read("IW5,1,E") == 1  # SR3: sensor faults
     assert plc.read("IW5,0,4") == 1 and plc.read("IW5,0,7") == 1 and plc.read("I5,S") == 0
-    assert mod.leds().err and mod.values[2] == -200 and mod.values[6] == 20976
+    assert mod.leds["ERR"] == "on" and mod.values[2] == -200 and mod.values[6] == 20976
     assert near(w[2], 5000) and near(w[6], 16000)  # SR2 keeps the last valid values
     r = plc.exchange(m=SYS, c=0x47, recv_bytes=8)  # SR3: 8 -> W25
     assert r.v == 0x77
@@ -138,4 +138,4 @@ def test_5_1_sensor_faults_through_the_fault_bit_string() -> None:
     mod.inject_fault("open_2", False)
     mod.set_input(6, volts=flow_volts(16000))
     sr2(plc, w, 3.2)
-    assert plc.read("IW5,1") == 0 and plc.read("IW5,0,7") == 0 and not mod.leds().err
+    assert plc.read("IW5,1") == 0 and plc.read("IW5,0,7") == 0 and mod.leds["ERR"] == "off"

@@ -71,7 +71,7 @@ def test_3_1_3_diagnostic_bits(words: list[int], bits: set[int]) -> None:
     iw2 = plc.read(f"IW{SLOT},2")
     assert {b for b in range(1, 6) if iw2 >> b & 1} == bits
     assert plc.read(f"IW{SLOT},0,B") == 1 and plc.read(f"IW{SLOT},0,C") == 0
-    assert mod.leds().err  # DEM 4.3 ERR: parameter refusal
+    assert mod.leds["ERR"] == "on"  # DEM 4.3 ERR: parameter refusal
     fault = plc.exchange(m=M_SYS, c=0x47, recv_bytes=12)
     assert fault.s == 12 and fault.data[4] & 0x08  # bit 35 configuration refused
     assert configure(plc, ASSEMBLY).v == 0xFE

@@ -5,7 +5,6 @@ from __future__ import annotations
 import pytest
 
 from fieldtwin.errors import ConfigError
-from fieldtwin.tsx.module import Leds
 from tests.tsx.dem24.helpers import M_SYS, SLOT, configure, make, read_all, synced
 
 
@@ -19,7 +18,7 @@ def test_4_3_terminal_block_removed_and_back() -> None:
     assert plc.read(f"IW{SLOT},0,A") == 1 and plc.read(f"IW{SLOT},0,6") == 1
     assert plc.read(f"IW{SLOT},0,4") == 1 and plc.read(f"I{SLOT},S") == 1
     assert plc.read(f"IW{SLOT},0,C") == 0  # 2.5-6: STOP until the fault disappears
-    assert mod.leds() == Leds(ok=False, err=False, f=False)
+    assert mod.leds == {"OK": "off", "ERR": "off", "F": "off"}
     assert plc.read(f"IW{SLOT},6") == 0  # DEF = 0: inputs forced to 0
     mod.set_input(5, True)  # not read while the terminal block is out
     plc.advance(0.02)
@@ -65,7 +64,7 @@ def test_2_5_6_monitored_external_supply_fault() -> None:
     mod.inject_fault("supply", True)
     plc.advance(0.03)
     assert plc.read(f"IW{SLOT},2,8") == 1 and plc.read(f"IW{SLOT},0,C") == 0
-    assert plc.read(f"I{SLOT},S") == 1 and not mod.leds().ok
+    assert plc.read(f"I{SLOT},S") == 1 and mod.leds["OK"] == "off"
     mod.inject_fault("supply", False)
     plc.advance(0.03)
     assert plc.read(f"IW{SLOT},2,8") == 0 and plc.read(f"IW{SLOT},0,C") == 1

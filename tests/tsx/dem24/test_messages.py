@@ -94,7 +94,7 @@ def test_2_3_4_overflow_at_200_is_flagged_in_the_next_message() -> None:
     plc.advance(0.02)
     assert plc.read(f"IW{SLOT},5") == 200
     assert plc.read(f"I{SLOT},3") == 1 and plc.read(f"I{SLOT},2") == 1
-    assert mod.leds().err and plc.read(f"IW{SLOT},0,7") == 1
+    assert mod.leds["ERR"] == "on" and plc.read(f"IW{SLOT},0,7") == 1
     fault = plc.exchange(m=0x0463, c=0x47, recv_bytes=12)
     assert fault.data[4] & 0x02  # bit 33 stack full
     first = read(plc)

@@ -6,6 +6,7 @@ import pytest
 
 from fieldtwin.clock import S
 from fieldtwin.errors import ConfigError
+from fieldtwin.tsx.plc import Plc
 from tests.tsx.dem24.helpers import (
     JULY_15_1994,
     SLOT,
@@ -68,7 +69,7 @@ def test_4_1_2_refused_time_is_fd_and_fault_bit_34() -> None:
     r = send_time(plc, [0x5E0D, 0x0F12, 0x0521, 0x0001])  # month 13
     assert r.v == 0xFD
     plc.advance(0.02)
-    assert mod.leds().err and plc.read(f"IW{SLOT},0,7") == 1
+    assert mod.leds["ERR"] == "on" and plc.read(f"IW{SLOT},0,7") == 1
     fault = plc.exchange(m=0x0463, c=0x47, recv_bytes=12)
     assert fault.v == 0x77 and fault.s == 12 and fault.data[4] == 0x04  # bit 34
     assert send_time(plc, [0x5F02, 0x1D00, 0, 1]).v == 0xFD  # 29 Feb 1995: not leap
@@ -93,7 +94,7 @@ def test_drift_fault_and_its_clearing_two_pulses_after_a_new_time() -> None:
     plc, mod = synced()  # 60 s pulses at 11 + 60 k s; 18:06:00 taken at 71 s
     mod.set_clock_drift(100.0)  # 6 ms per minute against DRIFT = 2 ms
     at(plc, 131.01)
-    assert plc.read(f"I{SLOT},4") == 1 and mod.leds().err
+    assert plc.read(f"I{SLOT},4") == 1 and mod.leds["ERR"] == "on"
     assert plc.read(f"IW{SLOT},0,7") == 1 and mod.running  # application fault: stays in RUN
     (msg,) = read_all(plc)
     assert msg[7] == (24 << 8) | 1 and (msg[1] >> 8) & 1 == 1  # channel 24, H = 1
@@ -104,7 +105,7 @@ def test_drift_fault_and_its_clearing_two_pulses_after_a_new_time() -> None:
     at(plc, 251.01)  # first pulse after reception: time taken
     assert plc.read(f"I{SLOT},4") == 1
     plc.advance(60.0)  # second pulse: the fault disappears
-    assert plc.read(f"I{SLOT},4") == 0 and not mod.leds().err
+    assert plc.read(f"I{SLOT},4") == 0 and mod.leds["ERR"] == "off"
     messages = read_all(plc)
     cleared = [m for m in messages if m[7] >> 8 == 24]
     assert [m[7] & 0xFF for m in cleared] == [0]
@@ -177,7 +178,11 @@ def test_5_3_4_post_program_time_setting_from_the_w_table() -> None:
 
 def test_7_2_sync_output_drives_at_most_32_modules() -> None:
     plc, source = make()
-    followers = [plc.insert("TSX DEM 2412", rack=1 + k // 8, slot=k % 8) for k in range(33)]
+    # DEM 6.2-2: 32 time-stamping modules a PLC, so the followers are in two other PLCs
+    others = [Plc(clock=plc.clock), Plc(clock=plc.clock)]
+    followers = [
+        others[k // 32].insert("TSX DEM 2412", rack=k % 32 // 8, slot=k % 8) for k in range(33)
+    ]
     for follower in followers[:32]:
         source.connect_sync_output(follower)
     with pytest.raises(ConfigError, match="at most 32"):

@@ -175,7 +175,7 @@ def test_6_1_self_test_faults() -> None:
     assert bits >> 24 & 1 and bits >> 26 & 1 and not bits >> 16 & 1
     mod.inject_fault("ram", True)
     plc.advance(0.02)
-    assert plc.read("IW7,0,8") == 1 and plc.read("IW7,0,4") == 1 and mod.leds().f
+    assert plc.read("IW7,0,8") == 1 and plc.read("IW7,0,4") == 1 and mod.leds["F"] == "on"
 
 
 def test_6_3_parity_fault_from_a_peer_with_another_format() -> None:

@@ -136,14 +136,19 @@ def _compatible(config: ModuleConfig) -> ModuleConfig | Rejection:
     return config
 
 
-def read_configuration(config: ModuleConfig, request: bytes, capacity: int) -> list[int] | None:
-    """AEM 4.4-3: the words answered to H'41' (None: an incorrect request, H'FD')."""
-    if not request:
-        words = config.words()
-        # TSX 47-20 text: a table too short for the whole configuration gets zone 1
-        return words if 2 * len(words) <= capacity else config.zone1()
-    words = bytes_to_words(request)
-    if len(request) != 2 or words[0] & 0xF8 != CHANNEL_ID:  # H'XXCi' (AEM 4.4-3 (*))
-        return None
-    channel = words[0] & 7
-    return config.zone1() + config.channels[channel].zone_words(channel)
+def read_configuration(config: ModuleConfig, request: bytes, capacity: int) -> list[int]:
+    """AEM 4.4-3: the words answered to H'41'.
+
+    A first transmitted word H'XXCi' (X any value) asks for channel i's zone
+    after zone 1; no transmission table, or a first word that is not H'XXC0' to
+    H'XXC7', asks for the complete configuration (the footnote (*): "the first word
+    ... should be different from codes H'XXC0' to H'XXC7' ... if a transmission
+    length is defined").  A single byte is not a word: the complete configuration.
+    """
+    first = bytes_to_words(request)[0] if len(request) >= 2 else None
+    if first is not None and first & 0xF8 == CHANNEL_ID:  # H'XXCi', X = any value
+        channel = first & 7
+        return config.zone1() + config.channels[channel].zone_words(channel)
+    words = config.words()
+    # TSX 47-20 text: a table too short for the whole configuration gets zone 1
+    return words if 2 * len(words) <= capacity else config.zone1()

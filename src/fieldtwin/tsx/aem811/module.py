@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Protocol
 
 from fieldtwin.clock import Handle, S
 from fieldtwin.errors import ConfigError
@@ -27,8 +27,6 @@ from fieldtwin.tsx.aem811.sequencer import SLOT_US, Sequencer, Slot
 from fieldtwin.tsx.aem811.thresholds import ThresholdDetector
 from fieldtwin.tsx.module import FaultCategory, IntelligentModule, ModuleContext, ModuleState
 from fieldtwin.tsx.textblock import (
-    ERR_MODULE_FAULT,
-    MODULE_SYSTEM,
     V_OK_WRITE,
     Answer,
     Exchange,
@@ -38,6 +36,12 @@ from fieldtwin.words import set_bit
 ACCELERATED_BIT = 8  # OWxy,1,8
 DEFAULT_CONFIG_BIT = 0xD  # IWxy,2,D
 RELAY_LIFE = 300_000_000  # AEM 2.5-2, 8.2: 3 x 10^8 operations
+
+
+class Startup(Protocol):
+    """A plant file's configuration, applied when the initial self-test ends."""
+
+    def apply(self, mod: Aem811) -> None: ...
 
 
 @dataclass(frozen=True, slots=True)
@@ -75,11 +79,8 @@ class Aem811(IntelligentModule):
         self.inputs = [ChannelInput() for _ in range(8)]
         self.cut = [False] * 8  # injected wire cuts (fault "open_N")
         self.relay_operations = [0] * 8
-        self._startup: Any = None
-        self._reset_volatile()
-
-    def _reset_volatile(self) -> None:
-        # AEM 2.5-3: no protected memory; power-up restarts with the defaults
+        self._startup: Startup | None = None
+        # the volatile memory (AEM 2.5-3): reset by _reset_volatile at power-up and off
         self.config: ModuleConfig = DEFAULT_CONFIG
         self.default_configuration = True
         self.rejection: Rejection | None = None
@@ -94,8 +95,27 @@ class Aem811(IntelligentModule):
         self._event: Handle | None = None
         self._sequencer: Sequencer | None = None
         self._channel_faults = 0  # IWxy,1,8..F: live, not memorised
-        self.run_started_at: int | None = None  # when acquisition last started
+        self.run_started_at_us: int | None = None  # when acquisition last started
         self.pending_thresholds: Exchange | None = None
+
+    def _reset_volatile(self) -> None:
+        # AEM 2.5-3: no protected memory; power-up restarts with the defaults
+        self.config = DEFAULT_CONFIG
+        self.default_configuration = True
+        self.rejection = None
+        self.thresholds = ThresholdDetector()
+        self.values = [0] * 8
+        self.snapshot = [0] * 8
+        self.registers = [0] * 4
+        self.selector = 0
+        self.measurements = [None] * 8
+        self.hysteresis_values = [hysteresis(c) for c in self.config.channels]
+        self._acquiring = None
+        self._event = None
+        self._sequencer = None
+        self._channel_faults = 0
+        self.run_started_at_us = None
+        self.pending_thresholds = None
 
     # --- inputs (API names fixed: tests outside the project use them) ---------
 
@@ -134,6 +154,11 @@ class Aem811(IntelligentModule):
             return None
         current = self.config.channels[channel].range.current
         return self.inputs[channel].millivolts(now, current)
+
+    @property
+    def run_started_at(self) -> float | None:
+        """Simulated seconds when acquisition last started (None in Stop)."""
+        return None if self.run_started_at_us is None else self.run_started_at_us / S
 
     # --- command words -------------------------------------------------------
 
@@ -194,9 +219,9 @@ class Aem811(IntelligentModule):
         self._acquiring = None
         if not running:  # AEM 4.1-2: the registers keep the last values
             self._sequencer = None
-            self.run_started_at = None
+            self.run_started_at_us = None
             return
-        self.run_started_at = now
+        self.run_started_at_us = now
         period = self.config.period * SLOT_US
         self._sequencer = Sequencer(period, self.accelerated, now)
         self._next_slot(now)
@@ -274,7 +299,7 @@ class Aem811(IntelligentModule):
     def ack_thresholds(self, now: int) -> None:
         """AEM 4.3-1: install the written thresholds and acknowledge with H'FE'."""
         exchange, self.pending_thresholds = self.pending_thresholds, None
-        if exchange is None or exchange.done:
+        if exchange is None:
             return
         level = 0 if exchange.request.code == requests.WRITE_T0 else 1
         self.thresholds.write_table(level, exchange.request.data)
@@ -315,12 +340,8 @@ class Aem811(IntelligentModule):
         self._cancel_event()
         self._acquiring, self._sequencer = None, None
         # AEM 4.4-1: a blocked module makes no exchange; what it held (a threshold
-        # write, a request sent during the self-test) ends with a module fault
+        # write, a request sent during the self-test) was ended by the base (module fault)
         self.pending_thresholds = None
-        for key in (requests.CHANNELS, MODULE_SYSTEM):
-            exchange = self.pending_exchange(key)
-            if exchange is not None:
-                exchange.complete(Answer.fault(ERR_MODULE_FAULT), now)
 
     def on_self_test_done(self, now: int) -> None:
         self.refresh_words()
@@ -339,7 +360,7 @@ class Aem811(IntelligentModule):
 
     # --- plant file and status -------------------------------------------------------
 
-    def schedule_startup(self, startup: Any) -> None:
+    def schedule_startup(self, startup: Startup) -> None:
         """Plant-file configuration: applied when the initial self-test ends."""
         if self.state is ModuleState.OPERATIONAL and not self.running:
             startup.apply(self)

@@ -3,8 +3,8 @@
 At H'xy00': 1 read measurements (H'81'), 2/4 write thresholds 0/1 (H'FE',
 answered once compared, so at Run if sent while stopped), 3/5 read thresholds
 0/1 (H'83'/H'85').  At H'xy63': H'40' write configuration (H'FE', only while
-stopped), H'41' read configuration (H'71'); H'0F', H'47', H'49', H'4A' are the
-base's.  Anything else: H'FD'.
+stopped), H'41' read configuration (H'71': all of it, or zone 1 and one channel);
+H'0F', H'47', H'49', H'4A' are the base's.  Anything else: H'FD'.
 """
 
 from __future__ import annotations
@@ -43,8 +43,7 @@ def handle(mod: Aem811, exchange: Exchange, now: int) -> None:
         exchange.complete(write_configuration(mod, request.data), now)
     elif request.channel == MODULE_SYSTEM and request.code == READ_CONFIG:
         words = read_configuration(mod.config, request.data, request.capacity)
-        answer = Answer(V_ERROR) if words is None else Answer(V_CONFIG, words_to_bytes(words))
-        exchange.complete(answer, now)
+        exchange.complete(Answer(V_CONFIG, words_to_bytes(words)), now)  # AEM 4.4-3
     else:
         exchange.complete(Answer(V_ERROR), now)
 

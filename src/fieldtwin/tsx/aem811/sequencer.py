@@ -34,7 +34,8 @@ class Sequencer:
     def __init__(self, period_us: int, accelerated: bool, now: int) -> None:
         self.period_us = period_us
         self.accelerated = accelerated
-        self.restart(now)
+        self.cycle_start = now
+        self.last = -1  # channel of the last slot begun in this cycle
 
     def restart(self, now: int) -> None:
         """A new cycle starting at ``now`` (Run, or a change of mode)."""

@@ -78,6 +78,7 @@ class Dem24(IntelligentModule):
     thresholds: ClassVar[Thresholds] = TYPE1_24V
     fault_string_bytes = 12  # DEM 4.3: 96 bits
     terminal_block_fault_bit = FB_TERMINAL
+    plc_limit = ("time-stamping modules", 32)  # DEM 6.2-2 note: 32 in one PLC configuration
 
     def __init__(
         self,

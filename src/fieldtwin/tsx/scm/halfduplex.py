@@ -98,10 +98,10 @@ class HalfDuplexChannel(Channel):
     def abort(self, now: int, write: bool = True, read: bool = True) -> list[Exchange]:
         exchange = self.exchange if self.state is not HdState.IDLE else None
         self.fire(HdInput.ABORT, now)
-        return [exchange] if exchange is not None else []
+        return [exchange] if exchange is not None and not exchange.done else []
 
     def _complete(self, answer: Answer, now: int) -> None:
-        if self.exchange is not None:
+        if self.exchange is not None and not self.exchange.done:  # request 2 ended early
             self.exchange.complete(answer, now)
 
     def _cancel_timers(self) -> None:

@@ -87,6 +87,7 @@ class ScmModule(IntelligentModule):
     self_test_us = 1 * S  # not given by the manual (manual-notes)
     fault_string_bytes = 6  # SCM 6.3: 6 bytes, three words
     has_run_stop = False  # AMB-SCM-26: IWxy,0,C is an activity flag
+    led_names = ("OK", "F")  # SCM 1.2: two indicator lights, green OK and red F
     discrete_outputs = 8  # SCM 5.1: Oxy,0..7
     battery_us = BATTERY_US
 
@@ -340,7 +341,8 @@ class ScmModule(IntelligentModule):
             write = self._exchanges.get(WRITE_KEY) is exchange
             for job in self.channels[index].abort(now, write, not write):
                 job.complete(Answer.fault(ERR_CANCELLED), now)
-            exchange.complete(Answer.fault(ERR_CANCELLED), now)
+            if not exchange.done:  # abort() ended it if it was that side's
+                exchange.complete(Answer.fault(ERR_CANCELLED), now)
             self.changed()
             return
         super().cancel_exchange(exchange, now)
