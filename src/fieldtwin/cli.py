@@ -97,17 +97,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
 
 
-def _module_endpoints(plant: Any) -> list[str]:
-    lines: list[str] = []
-    if plant.plc is not None:
-        for module in plant.plc.modules:
-            lines.extend(module.endpoint_lines())
-    return lines
-
-
 def _run(args: argparse.Namespace) -> int:
     from fieldtwin.live import plain_status, render
     from fieldtwin.plant import build_plant, plant_speed, read_plant
+    from fieldtwin.runtime.binder import bind
     from fieldtwin.runtime.runner import Runner
 
     plant_file = read_plant(args.plant)
@@ -115,7 +108,13 @@ def _run(args: argparse.Namespace) -> int:
     clock = SimClock()
     runner = Runner(clock, speed)
     plant = build_plant(plant_file, runner=runner, speed=speed)
-    endpoints = plant.start_endpoints(runner) + _module_endpoints(plant)
+    try:
+        binding = bind(plant.devices, runner)  # every port, once the plant is built
+    except BaseException:
+        plant.close()
+        raise
+    plant.bindings.append(binding)
+    endpoints = binding.lines
     for line in endpoints:
         print(line, flush=True)
     print(

@@ -40,7 +40,7 @@ from fieldtwin.tsx.dem24.stack import (
     STATE_OSCILLATING,
     MessageStack,
 )
-from fieldtwin.tsx.dem24.sync import SYNC_OUTPUT_MAX, PulseSource, announce
+from fieldtwin.tsx.dem24.sync import SYNC_OUTPUT_MAX, PulseSource
 from fieldtwin.tsx.dem24.timebase import SyncOutcome, Timebase
 from fieldtwin.tsx.module import FaultCategory, ModuleContext, ModuleState
 from fieldtwin.tsx.textblock import Exchange
@@ -84,8 +84,6 @@ class Dem24Core(Logbook):
         self.pulse_source: PulseSource | None = None
         self.plant_startup: list[Any] = []  # requests the plant file applies after self-test
         self.edges_stamped = 0
-        for follower in announce(self.clock, self, rack, slot):
-            self.connect_sync_output(follower)  # type: ignore[arg-type]
 
     # --- public API: inputs and pulses ------------------------------------------------
 
