@@ -49,7 +49,7 @@ def test_every_device_shows_the_same_face() -> None:
         aem, scm, tes = by_kind["TSX AEM 811"], by_kind["TSX SCM 2111"], by_kind["TES 8EA"]
         assert aem.address == ModuleAddress(0, 5)
         assert tes.address == TesAddress("tcp://127.0.0.1:5020", 2)
-        assert str(tes.address) == "tcp://127.0.0.1:5020#2"
+        assert str(tes.address) == "tcp://127.0.0.1:5020 2"
         assert aem.status().mode == "Run" and aem.status().led_map == {
             "OK": "on",
             "ERR": "off",
@@ -67,7 +67,7 @@ def test_every_device_shows_the_same_face() -> None:
         assert tes.status().state == "off"
         tes.fault("power").clear()
         assert tes.status().state == "on"
-        with pytest.raises(ConfigError, match=r"no input 'x' \(allowed: 0, 1, 2"):
+        with pytest.raises(ConfigError, match=r"TSX AEM 811 5: no input 'x' \(allowed: 0..7\)"):
             aem.input("x")
         with pytest.raises(ConfigError, match=r"unknown fault 'smoke' for TSX AEM 811 5"):
             aem.fault("smoke")
@@ -107,19 +107,24 @@ def test_endpoints_open_only_when_bound() -> None:
     assert scm.ports[0] is None
 
 
-def test_the_plant_configuration_is_sent_after_every_self_test() -> None:
-    # docs/plant.md: one rule for every kind (the AEM's used to be sent only once)
+def test_the_plant_configuration_is_sent_after_the_first_self_test_only() -> None:
+    # docs/plant.md: one rule for every kind (the DEM's used to be sent after every
+    # self-test, the AEM's once); a power break loses it as on the modules (2.5-3)
     plant = _plant(
         '[plc]\noutputs = { "OW5,0,C" = 1 }\n'
         '[[module]]\ntype = "TSX AEM 811"\nslot = 5\nconfig = { period = 30 }\n'
+        '[[module]]\ntype = "TSX DEM 2412"\nslot = 4\n'
+        "config = [\"H'0010'\", 10, 0, 0, 0, 0, 30, 10, 1]\n"
     )
     plc = plant.plc
     assert plc is not None
     plc.advance(11.0)
     assert plc.read("IW5,2,D") == 0  # IW5,2,D: the default configuration is gone
+    assert not plc.module(0, 4).default_config
     plc.power_break(1.0)
     plc.advance(11.0)
-    assert plc.read("IW5,2,D") == 0  # sent again after the self-test of the power return
+    assert plc.read("IW5,2,D") == 1  # lost with the power, not sent again
+    assert plc.module(0, 4).default_config
 
 
 def test_unknown_keys_name_the_kind_and_the_field() -> None:

@@ -87,9 +87,9 @@ SCHEMA = Schema(
     (
         Key("inputs", 'a table: channel = value or signal, e.g. { "0" = true, "3" = 24.0 }'),
         Key("sync", "{ period_s, start_s } a pulse source, or { from_rack, from_slot }"),
-        Key("time", 'the time sent after each self-test, "1994-07-15T18:05:33"'),
+        Key("time", 'the time sent after the first self-test, "1994-07-15T18:05:33"'),
         Key("time_indicator", "0..255, with time"),
-        Key("config", "the 9 configuration words, sent after each self-test"),
+        Key("config", "the 9 configuration words, sent after the first self-test"),
         Key("clock_drift_ppm", "the module clock's drift"),
         Key("faults", "fault names set at start"),
     ),

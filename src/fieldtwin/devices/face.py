@@ -44,13 +44,14 @@ class ModuleAddress:
 
 @dataclass(frozen=True, slots=True)
 class TesAddress:
-    """An endpoint and a slave number on it: ``tcp://127.0.0.1:5020#1``."""
+    """An endpoint and a slave number on it, as the console names it:
+    ``tcp://127.0.0.1:5020 1`` (``tes tcp://127.0.0.1:5020 1 read H'000'``)."""
 
     endpoint: str
     slave: int
 
     def __str__(self) -> str:
-        return f"{self.endpoint}#{self.slave}"
+        return f"{self.endpoint} {self.slave}"
 
 
 Address = ModuleAddress | TesAddress
@@ -98,7 +99,10 @@ class Input:
 
     def drive(self, spec: SignalSpec, *, where: str, base_dir: Path | None = None) -> None:
         if self.driver is None:
-            raise ConfigError(f"{where}: input {self.name!r} takes a value, not a signal")
+            raise ConfigError(
+                f"{where}: input {self.name!r} takes no input signals, a value only"
+                " (see the device's page for 'input')"
+            )
         self.driver(spec, where, base_dir)
 
 
@@ -173,12 +177,42 @@ class Device(Protocol):
     def ports(self) -> list[Port]: ...
 
 
+def allowed_names(names: list[str]) -> str:
+    """``0..7``, ``0..15, a0..a3``, ``0, 1, 0.CTS``: runs of numbered names as ranges."""
+    parts: list[str] = []
+    run: list[tuple[str, int]] = []  # (prefix, number) of the current run
+
+    def flush() -> None:
+        if run:
+            (prefix, first), (_, last) = run[0], run[-1]
+            text = f"{prefix}{first}..{prefix}{last}" if last - first > 1 else None
+            parts.extend([text] if text else [f"{p}{n}" for p, n in run])
+            run.clear()
+
+    for name in names:
+        prefix, digits = name.rstrip("0123456789"), name[len(name.rstrip("0123456789")) :]
+        if (
+            digits
+            and prefix in ("", "a")
+            and (not run or (run[-1][0] == prefix and run[-1][1] + 1 == int(digits)))
+        ):
+            run.append((prefix, int(digits)))
+            continue
+        flush()
+        if digits and prefix in ("", "a"):
+            run.append((prefix, int(digits)))
+        else:
+            parts.append(name)
+    flush()
+    return ", ".join(parts) or "none"
+
+
 def pick_input(device: Device, name: str) -> Input:
     """The input ``name`` of ``device``; the error lists what is allowed."""
     inputs = device.inputs()
     found = inputs.get(name.strip()) or inputs.get(name.strip().lower())
     if found is None:
-        allowed = ", ".join(inputs) or "none"
+        allowed = allowed_names(list(inputs))
         raise ConfigError(f"{device.kind} {device.address}: no input {name!r} (allowed: {allowed})")
     return found
 

@@ -324,8 +324,9 @@ class Aem811(IntelligentModule):
 
     def on_self_test_done(self, now: int) -> None:
         self.refresh_words()
-        if self._startup is not None:  # re-sent after every self-test (docs/plant.md)
-            self._startup.apply(self)
+        if self._startup is not None:
+            startup, self._startup = self._startup, None
+            startup.apply(self)
 
     # --- register words ------------------------------------------------------------
 

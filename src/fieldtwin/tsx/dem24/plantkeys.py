@@ -7,9 +7,9 @@ rack = 0
 slot = 4
 inputs = { "0" = true, "1" = 24.0, "2" = { kind = "pulse", period_s = 2.0 } }
 sync = { period_s = 30 }            # or { period_s = 60, start_s = 0.5 }, or { from_slot = 3 }
-time = "1994-07-15T18:05:33"        # sent as a request 2 after each self-test
+time = "1994-07-15T18:05:33"        # sent as a request 2 after the first self-test
 time_indicator = 1
-config = ["H'0014'", 10, 5, 3, 5, 2, 60, 500, 60]   # a request H'40' after each self-test
+config = ["H'0014'", 10, 5, 3, 5, 2, 60, 500, 60]   # a request H'40' after the first self-test
 clock_drift_ppm = 10.0
 faults = ["terminal_block"]
 ```
@@ -135,7 +135,7 @@ def _config(mod: Dem24, spec: Any, where: str) -> None:
     result = check_config(words)
     if isinstance(result, Refusal):
         raise ConfigError(f"{where}: refused by the module: {result.reason}")
-    mod.plant_startup.append(lambda m, now: m.apply_config(result, now))
+    mod.plant_startup.append(_once(lambda m, now: m.apply_config(result, now)))
 
 
 def _word(value: Any, where: str) -> int:
@@ -153,4 +153,24 @@ def _time(mod: Dem24, table: Mapping[str, Any], where: str) -> None:
     if isinstance(indicator, bool) or not isinstance(indicator, int) or not 0 <= indicator <= 255:
         raise ConfigError(f"{where}.time_indicator: {indicator!r} not allowed (allowed 0..255)")
     ref = TimeReference(civil, indicator)
-    mod.plant_startup.append(lambda m, now: m.timebase.reference(ref, now))
+
+    def reference(m: Dem24, now: int) -> None:
+        m.timebase.reference(ref, now)
+
+    mod.plant_startup.append(_once(reference))
+
+
+Startup = Callable[["Dem24", int], None]
+
+
+def _once(action: Startup) -> Startup:
+    """docs/plant.md: a plant file's configuration is sent at the end of the first initial
+    self-test only; a power break or a reinsertion loses it, as on the module (DEM 2.5-3)."""
+    sent: list[bool] = []
+
+    def send(mod: Dem24, now: int) -> None:
+        if not sent:
+            sent.append(True)
+            action(mod, now)
+
+    return send
