@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 from typing import ClassVar, TextIO
 
-from fieldtwin.clock import S
+from fieldtwin.clock import MS, S
 from fieldtwin.console_syntax import (
     canonical_name,
     integer,
@@ -63,11 +63,24 @@ HELP = {
 }
 
 
+ADVANCE_STEP_US = 100 * MS  # Ctrl-C is looked at between two steps of an advance
+
+
 class Console:
     """Executes console commands against a plant."""
 
-    def __init__(self, plant: Plant) -> None:
+    def __init__(
+        self,
+        plant: Plant,
+        *,
+        interrupted: Callable[[], bool] = lambda: False,
+        progress: Callable[[str], None] | None = None,
+    ) -> None:
+        """``interrupted`` is asked between the steps of an ``advance`` (the interactive
+        terminal's Ctrl-C); ``progress`` is told when a long one starts."""
         self.plant = plant
+        self.interrupted = interrupted
+        self.progress = progress
         self._commands: dict[str, Callable[[list[str]], list[str]]] = {
             "read": self._read,
             "write": self._write,
@@ -199,13 +212,24 @@ class Console:
         return f"t = {self.plant.clock.now / S:.3f} s"
 
     def _advance(self, args: list[str]) -> list[str]:
+        """In steps of ADVANCE_STEP_US, so that Ctrl-C stops it between two steps with
+        the plant as it stands (docs/console.md)."""
         if len(args) != 1:
             raise ConfigError("advance: takes one duration, e.g. advance 11 or advance 250ms")
-        duration = parse_duration(args[0])
-        if self.plant.plc is not None:
-            self.plant.plc.advance(duration)
-        else:
-            self.plant.clock.advance(round(duration * S))
+        left = round(parse_duration(args[0]) * S)
+        if self.progress is not None and left > ADVANCE_STEP_US:
+            self.progress(
+                f"advancing to t = {(self.plant.clock.now + left) / S:.3f} s (Ctrl-C interrupts)"
+            )
+        while left > 0:
+            if self.interrupted():
+                return [f"interrupted  {self._time()}"]
+            step = min(left, ADVANCE_STEP_US)
+            if self.plant.plc is not None:
+                self.plant.plc.advance(step / S)
+            else:
+                self.plant.clock.advance(step)
+            left -= step
         return [self._time()]
 
     # --- devices: one set of verbs for a module and a TES (the Device face) ----------

@@ -223,3 +223,21 @@ def test_tes_digital_input_takes_0_and_1(tmp_path: Path) -> None:
     status = console.execute("status")
     assert status[0] == "t = 0.000 s"
     assert status[1].startswith("TES 1 TES 32EST: on  status H'")
+
+
+def test_an_interrupted_advance_stops_between_two_steps(tmp_path: Path) -> None:
+    # issue 10 item 20: the terminal's Ctrl-C is asked between two 100 ms steps
+    path = tmp_path / "plant.toml"
+    path.write_text("[plc]\n")
+    plant = load_plant(path)
+    asked: list[int] = []
+    seen: list[str] = []
+
+    def ask() -> bool:
+        asked.append(plant.clock.now)
+        return len(asked) > 3
+
+    console = Console(plant, interrupted=ask, progress=seen.append)
+    assert console.execute("advance 10") == ["interrupted  t = 0.300 s"]
+    assert seen == ["advancing to t = 10.000 s (Ctrl-C interrupts)"]
+    assert console.execute("time") == ["t = 0.300 s"]  # the plant as it stood
