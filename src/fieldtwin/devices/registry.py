@@ -35,10 +35,9 @@ def norm(name: str) -> str:
 
 
 def register(kind: DeviceKind) -> None:
-    """Add a kind (the adapters' KINDS, or a device outside fieldtwin)."""
-    _kinds[(kind.family, norm(kind.name))] = kind
-    if kind.core is not None:
-        plc_types.register(kind.name, kind.core)
+    """Add a kind (the adapters' KINDS, or a device outside fieldtwin: after them)."""
+    _load()
+    _add(kind)
 
 
 def _load() -> None:
@@ -48,7 +47,13 @@ def _load() -> None:
     for path in ADAPTERS:
         adapter = importlib.import_module(path)
         for kind in adapter.KINDS:
-            register(kind)
+            _add(kind)
+
+
+def _add(kind: DeviceKind) -> None:
+    _kinds[(kind.family, norm(kind.name))] = kind
+    if kind.core is not None:
+        plc_types.register(kind.name, kind.core)
 
 
 def kinds(family: Family | None = None) -> list[DeviceKind]:
