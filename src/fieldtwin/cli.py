@@ -8,13 +8,16 @@ import signal
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 from fieldtwin import __version__
 from fieldtwin.clock import S, SimClock
 from fieldtwin.errors import FieldtwinError
 
-SUPPRESS_SPEED: Any = object()  # --speed not given: the plant's [run] speed decides
+if TYPE_CHECKING:
+    from rich.live import Live
+
+SUPPRESS_SPEED: object = object()  # --speed not given: the plant's [run] speed decides
 
 
 def _speed(text: str) -> float | None:
@@ -135,7 +138,7 @@ def _run(args: argparse.Namespace) -> int:
             next_status[0] = now + round(args.status_every * S)
             print("\n".join(plain_status(plant)), flush=True)
 
-    live_view: Any = None
+    live_view: Live | None = None
     try:
         if live:
             from rich.live import Live

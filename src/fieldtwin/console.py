@@ -259,6 +259,8 @@ class Console:
             lines.append(f"IW: {iw}")
             lines.append(f"OW: {ow}")
             lines.append(f"I: {plc.image(rack, slot).i_bits:016b} (F..0)")
+        if not args and self.plant.tes_devices:
+            lines.extend(["", *self._tes_status()])
         return lines
 
     def _input(self, args: list[str]) -> list[str]:
