@@ -24,7 +24,7 @@ from fieldtwin.console_syntax import (
     split_line,
     value_of,
 )
-from fieldtwin.devices.face import Device
+from fieldtwin.devices.face import Device, ModuleAddress
 from fieldtwin.devices.tes import TesDevice
 from fieldtwin.errors import ConfigError, FieldtwinError
 from fieldtwin.live import tes_line
@@ -43,9 +43,9 @@ HELP = {
     "advance": "advance DURATION          advance 11   advance 250ms   advance 2min",
     "time": "time                      the simulated time",
     "status": "status [MODULE]           module state, mode, LEDs, registers (MODULE = 5 or 23)",
-    "input": "input MODULE CHANNEL VALUE   set an input as the module takes it"
-    " (2.5V, 12mA, open, 1)",
-    "signal": "signal MODULE CHANNEL KIND key=value...\n"
+    "input": "input MODULE NAME VALUE  set an input as the module takes it"
+    " (input 5 0 2.5V, input 4 3 1, input 7 0.CTS 0)",
+    "signal": "signal MODULE NAME KIND key=value...\n"
     "                           e.g. signal 5 0 sine offset=5 amplitude=2 period_s=60",
     "fault": "fault MODULE NAME on|off  inject or clear a fault; 'faults MODULE' lists the names",
     "faults": "faults MODULE             the faults a module can be given",
@@ -252,8 +252,8 @@ class Console:
             lines.append("")
             lines.extend(f"{key}: {value}" for key, value in device.status().details)
             address = device.address
-            assert not isinstance(address, str)
-            rack, slot = module_address(str(address))
+            assert isinstance(address, ModuleAddress)
+            rack, slot = address.rack, address.slot
             iw = " ".join(format_hex(w) for w in plc.image(rack, slot).iw)
             ow = " ".join(format_hex(w) for w in plc.output_words(rack, slot))
             lines.append(f"IW: {iw}")

@@ -44,11 +44,10 @@ def _render(plant: Plant, endpoints: list[str], width: int) -> Group:
     parts: list[Table | Text] = [
         Text(f"{plant.title}   t = {plant.clock.now / S:,.1f} s   speed {_speed(plant)}", "bold")
     ]
-    modules = [d for d in plant.devices if not isinstance(d.address, TesAddress)]
     if plant.plc is not None:
         plc = plant.plc
         title = f"{plc.model.name} {'RUN' if plc.running else 'STOP'}"
-        parts.append(_modules(plant, modules, title, width))
+        parts.append(_modules(plant, _module_devices(plant), title, width))
     tes = [d for d in plant.devices if isinstance(d.address, TesAddress)]
     if tes:
         parts.append(_tes_table(tes, width))
@@ -109,6 +108,13 @@ def _tes_table(devices: list[Device], width: int) -> Table:
     return table
 
 
+def _module_devices(plant: Plant) -> list[Device]:
+    """Every module in the PLC's slots (one inserted from Python too), in slot order."""
+    if plant.plc is None:
+        return []
+    return [plant.module_device(m.rack, m.slot) for m in plant.plc.modules]
+
+
 def _rack_slot(device: Device) -> tuple[int, int]:
     address = device.address
     assert not isinstance(address, TesAddress)
@@ -157,9 +163,7 @@ def plain_status(plant: Plant) -> list[str]:
     """One line per device: for logs and non-terminal output."""
     lines = [f"t = {plant.clock.now / S:.3f} s"]
     plc = plant.plc
-    for device in plant.devices:
-        if isinstance(device.address, TesAddress):
-            continue
+    for device in _module_devices(plant):
         assert plc is not None
         status = device.status()
         rack, slot = _rack_slot(device)
