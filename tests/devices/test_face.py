@@ -9,6 +9,7 @@ import pytest
 from fieldtwin.clock import SimClock
 from fieldtwin.devices import registry
 from fieldtwin.devices.face import Family, ModuleAddress, TesAddress
+from fieldtwin.devices.kind import DeviceKind
 from fieldtwin.errors import ConfigError
 from fieldtwin.plant import _parse, build_plant, load_plant
 from fieldtwin.runtime.binder import bind
@@ -144,3 +145,20 @@ def test_a_sync_partner_is_found_through_the_plc() -> None:
             '[[module]]\ntype = "TSX DEM 2412"\nslot = 5\nsync = { from_slot = 3 }\n'
             '[[module]]\ntype = "TSX AEM 811"\nslot = 3\n'
         )
+
+
+IDENTITY = {Family.MODULE: {"slot": 3}, Family.TES: {"endpoint": "pty", "slave": 9}}
+
+
+@pytest.mark.parametrize("kind", registry.kinds(), ids=lambda k: k.name)
+def test_every_kind_refuses_an_unknown_key_the_same_way(kind: DeviceKind) -> None:
+    key = "type" if kind.family is Family.MODULE else "model"
+    table = {key: kind.name, **IDENTITY[kind.family], "colour": "red"}
+    section = "module" if kind.family is Family.MODULE else "tes"
+    text = "\n".join(f"{k} = {v!r}".replace("'", '"') for k, v in table.items())
+    with pytest.raises(ConfigError) as info:
+        _plant(f"[[{section}]]\n{text}\n")
+    assert str(info.value).startswith(
+        f"p.toml: {section}[0]: unknown key(s) colour ({section}[0].colour is not a key of"
+        f" {kind.name}; allowed: {key}, "
+    )
