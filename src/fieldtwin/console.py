@@ -222,14 +222,14 @@ class Console:
                 f"advancing to t = {(self.plant.clock.now + left) / S:.3f} s (Ctrl-C interrupts)"
             )
         while left > 0:
-            if self.interrupted():
-                return [f"interrupted  {self._time()}"]
             step = min(left, ADVANCE_STEP_US)
             if self.plant.plc is not None:
                 self.plant.plc.advance(step / S)
             else:
                 self.plant.clock.advance(step)
             left -= step
+            if left > 0 and self.interrupted():
+                return [f"interrupted  {self._time()}"]
         return [self._time()]
 
     # --- devices: one set of verbs for a module and a TES (the Device face) ----------

@@ -238,9 +238,10 @@ def test_an_interrupted_advance_stops_between_two_steps(tmp_path: Path) -> None:
         return len(asked) > 3
 
     console = Console(plant, interrupted=ask, progress=seen.append)
-    assert console.execute("advance 10") == ["interrupted  t = 0.300 s"]
+    assert console.execute("advance 10") == ["interrupted  t = 0.400 s"]
+    assert asked == [100_000, 200_000, 300_000, 400_000]
     assert seen == ["advancing to t = 10.000 s (Ctrl-C interrupts)"]
-    assert console.execute("time") == ["t = 0.300 s"]  # the plant as it stood
+    assert console.execute("time") == ["t = 0.400 s"]  # the plant as it stood
 
 
 def test_tes_verbs_are_the_module_verbs(tmp_path: Path) -> None:
