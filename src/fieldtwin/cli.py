@@ -8,13 +8,16 @@ import signal
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 from fieldtwin import __version__
 from fieldtwin.clock import S, SimClock
 from fieldtwin.errors import FieldtwinError
 
-SUPPRESS_SPEED: Any = object()  # --speed not given: the plant's [run] speed decides
+if TYPE_CHECKING:
+    from rich.live import Live
+
+SUPPRESS_SPEED: object = object()  # --speed not given: the plant's [run] speed decides
 
 
 def _speed(text: str) -> float | None:
@@ -97,17 +100,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
 
 
-def _module_endpoints(plant: Any) -> list[str]:
-    lines: list[str] = []
-    if plant.plc is not None:
-        for module in plant.plc.modules:
-            lines.extend(module.endpoint_lines())
-    return lines
-
-
 def _run(args: argparse.Namespace) -> int:
     from fieldtwin.live import plain_status, render
     from fieldtwin.plant import build_plant, plant_speed, read_plant
+    from fieldtwin.runtime.binder import bind
     from fieldtwin.runtime.runner import Runner
 
     plant_file = read_plant(args.plant)
@@ -115,7 +111,13 @@ def _run(args: argparse.Namespace) -> int:
     clock = SimClock()
     runner = Runner(clock, speed)
     plant = build_plant(plant_file, runner=runner, speed=speed)
-    endpoints = plant.start_endpoints(runner) + _module_endpoints(plant)
+    try:
+        binding = bind(plant.devices, runner)  # every port, once the plant is built
+    except BaseException:
+        plant.close()
+        raise
+    plant.bindings.append(binding)
+    endpoints = binding.lines
     for line in endpoints:
         print(line, flush=True)
     print(
@@ -136,7 +138,7 @@ def _run(args: argparse.Namespace) -> int:
             next_status[0] = now + round(args.status_every * S)
             print("\n".join(plain_status(plant)), flush=True)
 
-    live_view: Any = None
+    live_view: Live | None = None
     try:
         if live:
             from rich.live import Live

@@ -8,12 +8,11 @@ message names the token at fault and what is allowed.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
-from typing import Any, TextIO
+from typing import ClassVar, TextIO
 
-from fieldtwin.clock import S
+from fieldtwin.clock import MS, S
 from fieldtwin.console_syntax import (
     canonical_name,
-    channel_number,
     integer,
     latin1,
     looks_like_object,
@@ -25,9 +24,11 @@ from fieldtwin.console_syntax import (
     split_line,
     value_of,
 )
+from fieldtwin.devices.face import Device, ModuleAddress
+from fieldtwin.devices.tes import TesDevice
 from fieldtwin.errors import ConfigError, FieldtwinError
+from fieldtwin.live import tes_line
 from fieldtwin.plant import Plant
-from fieldtwin.signals import signal_from_spec
 from fieldtwin.tsx.addressing import parse_object
 from fieldtwin.tsx.plc import Plc
 from fieldtwin.tsx.txt import ExchangeTimeout
@@ -42,28 +43,44 @@ HELP = {
     "advance": "advance DURATION          advance 11   advance 250ms   advance 2min",
     "time": "time                      the simulated time",
     "status": "status [MODULE]           module state, mode, LEDs, registers (MODULE = 5 or 23)",
-    "input": "input MODULE CHANNEL VALUE   set an input as the module takes it"
-    " (2.5V, 12mA, open, 1)",
-    "signal": "signal MODULE CHANNEL KIND key=value...\n"
+    "input": "input MODULE NAME VALUE  set an input as the module takes it"
+    " (input 5 0 2.5V, input 4 3 1, input 7 0.CTS 0)",
+    "signal": "signal MODULE NAME KIND key=value...\n"
     "                           e.g. signal 5 0 sine offset=5 amplitude=2 period_s=60",
     "fault": "fault MODULE NAME on|off  inject or clear a fault; 'faults MODULE' lists the names",
     "faults": "faults MODULE             the faults a module can be given",
+    "leds": "leds MODULE               the front-panel LEDs: OK=on ERR=off F=off",
     "power": "power break SECONDS       cut the PLC supply",
     "remove": "remove MODULE             pull a module out under power",
     "insert": "insert MODULE             put it back (it runs its self-test)",
     "plc": "plc run|stop|cold|hot     PLC mode, cold restart (SY0), hot restart (SY1)",
     "txt": "txt I [reset]             a Text Block's outputs; reset ends its exchange (TXTi,S = 1)",
-    "tes": "tes SLAVE read ADDR [N] | write ADDR VALUE | input I VALUE | power-cycle",
+    "tes": "tes [ENDPOINT] SLAVE read ADDR [N] | peek ADDR [N] | write ADDR VALUE"
+    " | input I VALUE | signal I KIND key=value... | fault NAME on|off | faults | status | leds"
+    " | power-cycle",
     "help": "help [COMMAND]",
     "quit": "quit",
 }
 
 
+ADVANCE_STEP_US = 100 * MS  # Ctrl-C is looked at between two steps of an advance
+
+
 class Console:
     """Executes console commands against a plant."""
 
-    def __init__(self, plant: Plant) -> None:
+    def __init__(
+        self,
+        plant: Plant,
+        *,
+        interrupted: Callable[[], bool] = lambda: False,
+        progress: Callable[[str], None] | None = None,
+    ) -> None:
+        """``interrupted`` is asked between the steps of an ``advance`` (the interactive
+        terminal's Ctrl-C); ``progress`` is told when a long one starts."""
         self.plant = plant
+        self.interrupted = interrupted
+        self.progress = progress
         self._commands: dict[str, Callable[[list[str]], list[str]]] = {
             "read": self._read,
             "write": self._write,
@@ -75,6 +92,7 @@ class Console:
             "signal": self._signal,
             "fault": self._fault,
             "faults": self._faults,
+            "leds": self._leds,
             "power": self._power,
             "remove": self._remove,
             "insert": self._insert,
@@ -154,17 +172,21 @@ class Console:
             send.append(parse_word(token))
         txt = integer(options.pop("txt", "0"), "exchange txt")
         recv = options.pop("recv", None)
-        kwargs: dict[str, Any] = {"recv_bytes": 0 if recv is None else integer(recv, "recv")}
-        if "text" in options:
-            kwargs["send_bytes"] = latin1(options.pop("text"))
-        else:
-            kwargs["send"] = send
-        if "length" in options:
-            kwargs["length"] = integer(options.pop("length"), "exchange length")
-        if "timeout" in options:
-            kwargs["timeout_s"] = parse_duration(options.pop("timeout"))
+        recv_bytes = 0 if recv is None else integer(recv, "recv")
+        text = latin1(options.pop("text")) if "text" in options else None
+        length = integer(options.pop("length"), "exchange length") if "length" in options else None
+        timeout_s = parse_duration(options.pop("timeout")) if "timeout" in options else 1200.0
         try:
-            result = self.plc.exchange(m, c, txt=txt, **kwargs)
+            result = self.plc.exchange(
+                m,
+                c,
+                None if text is not None else send,
+                txt=txt,
+                recv_bytes=recv_bytes,
+                send_bytes=text,
+                length=length,
+                timeout_s=timeout_s,
+            )
         except ExchangeTimeout as exc:
             raise ExchangeTimeout(
                 f"{exc}; 'txt {txt}' shows it, 'txt {txt} reset' ends it"
@@ -190,82 +212,81 @@ class Console:
         return f"t = {self.plant.clock.now / S:.3f} s"
 
     def _advance(self, args: list[str]) -> list[str]:
+        """In steps of ADVANCE_STEP_US, so that Ctrl-C stops it between two steps with
+        the plant as it stands (docs/console.md)."""
         if len(args) != 1:
             raise ConfigError("advance: takes one duration, e.g. advance 11 or advance 250ms")
-        duration = parse_duration(args[0])
-        if self.plant.plc is not None:
-            self.plant.plc.advance(duration)
-        else:
-            self.plant.clock.advance(round(duration * S))
+        left = round(parse_duration(args[0]) * S)
+        if self.progress is not None and left > ADVANCE_STEP_US:
+            self.progress(
+                f"advancing to t = {(self.plant.clock.now + left) / S:.3f} s (Ctrl-C interrupts)"
+            )
+        while left > 0:
+            step = min(left, ADVANCE_STEP_US)
+            if self.plant.plc is not None:
+                self.plant.plc.advance(step / S)
+            else:
+                self.plant.clock.advance(step)
+            left -= step
+            if left > 0 and self.interrupted():
+                return [f"interrupted  {self._time()}"]
         return [self._time()]
 
-    # --- modules ---------------------------------------------------------------------
+    # --- devices: one set of verbs for a module and a TES (the Device face) ----------
 
-    def _module(self, token: str) -> Any:
+    def _module(self, token: str) -> Device:
         rack, slot = module_address(token)
-        return self.plc.module(rack, slot)
+        return self.plant.module_device(rack, slot)
 
     def _status(self, args: list[str]) -> list[str]:
         if self.plant.plc is None and not args:
             return [self._time(), *self._tes_status()]
         plc = self.plc
-        modules = [self._module(args[0])] if args else plc.modules
+        modules = (
+            [self._module(args[0])]
+            if args
+            else [self.plant.module_device(m.rack, m.slot) for m in plc.modules]
+        )
         lines = [f"PLC {plc.model.name} {'RUN' if plc.running else 'STOP'}  {self._time()}"]
-        for module in modules:
+        for device in modules:
             lines.append("")
-            for key, value in module.status().items():
-                lines.append(f"{key}: {value}")
-            iw = " ".join(format_hex(w) for w in plc.image(module.rack, module.slot).iw)
-            ow = " ".join(format_hex(w) for w in plc.output_words(module.rack, module.slot))
+            lines.extend(f"{key}: {value}" for key, value in device.status().details)
+            address = device.address
+            assert isinstance(address, ModuleAddress)
+            rack, slot = address.rack, address.slot
+            iw = " ".join(format_hex(w) for w in plc.image(rack, slot).iw)
+            ow = " ".join(format_hex(w) for w in plc.output_words(rack, slot))
             lines.append(f"IW: {iw}")
             lines.append(f"OW: {ow}")
-            lines.append(f"I: {plc.image(module.rack, module.slot).i_bits:016b} (F..0)")
+            lines.append(f"I: {plc.image(rack, slot).i_bits:016b} (F..0)")
+        if not args and self.plant.tes_devices:
+            lines.extend(["", *self._tes_status()])
         return lines
 
     def _input(self, args: list[str]) -> list[str]:
         if len(args) != 3:
             raise ConfigError("input: takes MODULE CHANNEL VALUE, e.g. input 5 0 2.5V")
-        module = self._module(args[0])
-        module.console_input(channel_number(args[1]), args[2])
-        return [f"input {module.address} {args[1]} = {args[2]}"]
+        return set_input(self._module(args[0]), f"input {args[0]}", args[1:])
 
     def _signal(self, args: list[str]) -> list[str]:
         if len(args) < 3:
             raise ConfigError(
                 "signal: takes MODULE CHANNEL KIND key=value..., e.g. signal 5 0 sine"
             )
-        module = self._module(args[0])
-        spec: dict[str, Any] = {"kind": args[2]}
-        for pair in args[3:]:
-            key, sep, value = pair.partition("=")
-            if not sep:
-                raise ConfigError(f"signal: {pair!r} is not key=value")
-            spec[key] = value_of(value)
-        where = f"signal {args[0]} {args[1]}"
-        built = signal_from_spec(spec, where=where)
-        setter = getattr(module, "set_signal", None)
-        try:
-            if setter is None:
-                raise TypeError(module.type_name)
-            setter(channel_number(args[1]), built)
-        except TypeError:
-            raise ConfigError(
-                f"{module.type_name} takes no input signals (see its page for 'input')"
-            ) from None
-        return [f"signal {module.address} {args[1]} = {args[2]}"]
+        return set_signal(self._module(args[0]), f"signal {args[0]}", args[1:])
 
     def _fault(self, args: list[str]) -> list[str]:
-        if len(args) != 3 or args[2].lower() not in ("on", "off"):
+        if len(args) != 3:
             raise ConfigError("fault: takes MODULE NAME on|off, e.g. fault 5 terminal_block on")
-        module = self._module(args[0])
-        module.inject_fault(args[1], args[2].lower() == "on")
-        return [f"fault {module.address} {args[1]} {args[2].lower()}"]
+        return set_fault(self._module(args[0]), f"fault {args[0]}", args[1:])
 
     def _faults(self, args: list[str]) -> list[str]:
         if len(args) != 1:
             raise ConfigError("faults: takes MODULE")
-        names = self._module(args[0]).fault_names()
-        return [f"{name}: {text}" for name, text in names.items()] or ["(none)"]
+        return list_faults(self._module(args[0]))
+
+    def _leds(self, args: list[str]) -> list[str]:
+        return [self._module(one_argument(args, "leds MODULE")).status().leds_text()]
 
     def _power(self, args: list[str]) -> list[str]:
         if len(args) != 2 or args[0] != "break":
@@ -298,43 +319,68 @@ class Console:
         return [f"PLC {'RUN' if self.plc.running else 'STOP'}{done}"]
 
     def _tes_status(self) -> list[str]:
-        from fieldtwin.live import tes_status
-
-        return [f"TES {t.slave} {t.model.name}: {tes_status(t)}" for t in self.plant.tes]
+        return [tes_line(d) for d in self.plant.tes_devices]
 
     # --- TES -------------------------------------------------------------------------
 
     def _tes(self, args: list[str]) -> list[str]:
+        """``tes [ENDPOINT] SLAVE VERB ...``: the endpoint may be left out when one TES
+        answers that slave number."""
         if len(args) < 2:
             raise ConfigError(HELP["tes"])
+        endpoint = None
+        if not args[0].isdigit() and len(args) >= 3 and args[1].isdigit():
+            endpoint, args = args[0], args[1:]
         try:
             slave = int(args[0])
         except ValueError:
             raise ConfigError(f"tes: {args[0]!r} is not a slave number") from None
-        tes, verb, rest = self.plant.tes_by_slave(slave), args[1].lower(), args[2:]
-        if verb == "read" and rest:
-            start = parse_word(rest[0])
-            count = integer(rest[1], "tes read N") if len(rest) > 1 else 1
-            if not 1 <= count <= 256:
-                raise ConfigError(f"tes read: N = {count} not allowed (allowed 1..256)")
-            return [
-                f"tes {slave} {format_hex(a, 3)} = {format_hex(tes.read(a))}"
-                for a in range(start, start + count)
-            ]
-        if verb == "write" and len(rest) == 2:
-            address, value = parse_word(rest[0]), parse_word(rest[1])
-            tes.write(address, value)
-            return [f"tes {slave} {format_hex(address, 3)} = {format_hex(tes.read(address))}"]
-        if verb == "input" and len(rest) == 2:
-            value = value_of(rest[1])
-            if not tes.model.analog_inputs and value in (0, 1):
-                value = bool(value)  # a digital TES: 0 / 1 is a contact, as for modules
-            tes.set_input(integer(rest[0], "tes input"), value)
-            return [f"tes {slave} input {rest[0]} = {rest[1]}"]
-        if verb == "power-cycle" and not rest:
-            tes.power_cycle()
-            return [f"tes {slave} power cycled"]
-        raise ConfigError(f"tes: {' '.join(args[1:])!r} not understood ({HELP['tes']})")
+        device = self.plant.tes_device(slave, endpoint)
+        head = f"tes {slave}" if endpoint is None else f"tes {endpoint} {slave}"
+        verb, rest = args[1].lower(), args[2:]
+        words = self._TES_VERBS.get(verb)
+        if words is None or not words[0] <= len(rest) <= words[1]:
+            raise ConfigError(f"tes: {' '.join(args[1:])!r} not understood ({HELP['tes']})")
+        return words[2](self, device, head, rest)
+
+    def _tes_read(self, device: TesDevice, head: str, rest: list[str], peek: bool) -> list[str]:
+        start = parse_word(rest[0])
+        count = integer(rest[1], "tes read N") if len(rest) > 1 else 1
+        if not 1 <= count <= 256:
+            raise ConfigError(f"tes read: N = {count} not allowed (allowed 1..256)")
+        words = device.objects()
+        read = words.peek if peek else words.read  # a read is a master's, with its effects
+        return [
+            f"{head} {format_hex(a, 3)} = {format_hex(read(str(a)))}"
+            for a in range(start, start + count)
+        ]
+
+    def _tes_write(self, device: TesDevice, head: str, rest: list[str]) -> list[str]:
+        address, value = parse_word(rest[0]), parse_word(rest[1])
+        device.objects().write(str(address), value)
+        return [
+            f"{head} {format_hex(address, 3)} = {format_hex(device.objects().peek(str(address)))}"
+        ]
+
+    def _tes_power_cycle(self, device: TesDevice, head: str, rest: list[str]) -> list[str]:
+        device.fault("power").set()
+        device.fault("power").clear()
+        return [f"{head} power cycled"]
+
+    _TES_VERBS: ClassVar[
+        dict[str, tuple[int, int, Callable[[Console, TesDevice, str, list[str]], list[str]]]]
+    ] = {
+        "read": (1, 2, lambda c, d, h, r: c._tes_read(d, h, r, peek=False)),
+        "peek": (1, 2, lambda c, d, h, r: c._tes_read(d, h, r, peek=True)),
+        "write": (2, 2, lambda c, d, h, r: c._tes_write(d, h, r)),
+        "input": (2, 2, lambda c, d, h, r: set_input(d, f"{h} input", r)),
+        "signal": (2, 64, lambda c, d, h, r: set_signal(d, f"{h} signal", r)),
+        "fault": (2, 2, lambda c, d, h, r: set_fault(d, f"{h} fault", r)),
+        "faults": (0, 0, lambda c, d, h, r: list_faults(d)),
+        "status": (0, 0, lambda c, d, h, r: [tes_line(d)]),
+        "leds": (0, 0, lambda c, d, h, r: [d.status().leds_text()]),
+        "power-cycle": (0, 0, lambda c, d, h, r: c._tes_power_cycle(d, h, r)),
+    }
 
     def _help(self, args: list[str]) -> list[str]:
         if args:
@@ -343,6 +389,40 @@ class Console:
                 raise ConfigError(f"help: unknown command {args[0]!r} (allowed: {', '.join(HELP)})")
             return [HELP[key]]
         return list(HELP.values())
+
+
+def set_input(device: Device, head: str, args: list[str]) -> list[str]:
+    """``NAME VALUE`` on any device: ``input 5 0 = 2.5V``, ``tes 1 input 3 = true``."""
+    name, value = args
+    device.input(name).set(value)
+    return [f"{head} {name} = {value}"]
+
+
+def set_signal(device: Device, head: str, args: list[str]) -> list[str]:
+    """``NAME KIND key=value...``: the input driven by a signal (docs/signals.md)."""
+    name, kind, *pairs = args
+    spec: dict[str, object] = {"kind": kind}
+    for pair in pairs:
+        key, sep, value = pair.partition("=")
+        if not sep:
+            raise ConfigError(f"signal: {pair!r} is not key=value")
+        spec[key] = value_of(value)
+    device.input(name).drive(spec, where=f"{head} {name}")
+    return [f"{head} {name} = {kind}"]
+
+
+def set_fault(device: Device, head: str, args: list[str]) -> list[str]:
+    name, state = args[0], args[1].lower()
+    if state not in ("on", "off"):
+        raise ConfigError(f"fault: {args[1]!r} not allowed (allowed: on, off)")
+    device.fault(name).set(state == "on")
+    return [f"{head} {name} {state}"]
+
+
+def list_faults(device: Device) -> list[str]:
+    return [f"{fault.name}: {fault.description}" for fault in device.faults().values()] or [
+        "(none)"
+    ]
 
 
 def run_script(

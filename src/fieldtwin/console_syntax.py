@@ -9,10 +9,10 @@ from __future__ import annotations
 import math
 import shlex
 from collections.abc import Iterator
-from typing import Any
 
 from fieldtwin.errors import ConfigError
 from fieldtwin.tsx.addressing import format_object, parse_module, parse_object
+from fieldtwin.tsx.txt import ExchangeResult
 from fieldtwin.words import format_hex, parse_word
 
 _UNITS = {"us": 1e-6, "ms": 1e-3, "s": 1.0, "min": 60.0, "h": 3600.0}
@@ -48,7 +48,7 @@ def integer(token: str, what: str) -> int:
         raise ConfigError(f"{what}: {token!r} is not an integer") from None
 
 
-def value_of(token: str) -> Any:
+def value_of(token: str) -> int | float | bool | str:
     for cast in (int, float):
         try:
             return cast(token)
@@ -59,7 +59,7 @@ def value_of(token: str) -> Any:
     return token
 
 
-def result_lines(txt: int, result: Any) -> list[str]:
+def result_lines(txt: int, result: ExchangeResult) -> list[str]:
     """The report line of a Text Block, then its data and text (docs/console.md)."""
     name = f"TXT{txt}"
     lines = [

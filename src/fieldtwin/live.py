@@ -1,75 +1,158 @@
-"""The live status view of `fieldtwin run` (rich), and its plain-text twin."""
+"""The live status view of `fieldtwin run` (rich), and its plain-text twin.
+
+Both see the plant through the Device face only (fieldtwin.devices.face).  The
+view fits the terminal: at 130 columns and more one line per module with a
+column per LED and the input bits; from 96 columns the LEDs share a column and
+the input bits are one hex word; below, each module's eight input words take
+two lines of their own column (80 x 24 shows the default plant whole).
+"""
 
 from __future__ import annotations
 
-from typing import Any
-
-from rich.console import Group
+from rich import box
+from rich.console import Console, ConsoleOptions, Group, RenderResult
 from rich.table import Table
 from rich.text import Text
 
 from fieldtwin.clock import S
+from fieldtwin.devices.face import Device, DeviceStatus, TesAddress
 from fieldtwin.plant import Plant
-from fieldtwin.tsx.bus import ModuleState
-from fieldtwin.words import format_hex
+
+WIDE = 130  # a column per LED, the input bits in binary
+MEDIUM = 96  # one LED column, input bits in hex; below: input words on two lines
+_LIT = {"on": ("●", "green"), "blink": ("◐", "yellow"), "off": ("○", "dim")}
+_ALARM = {"ERR", "F"}  # LEDs that are red when lit
 
 
-def _led(on: bool, colour: str) -> Text:
-    return Text("●", style=colour) if on else Text("○", style="dim")
+class LiveView:
+    """A renderable that lays itself out for the width it is given."""
+
+    def __init__(self, plant: Plant, endpoints: list[str]) -> None:
+        self.plant = plant
+        self.endpoints = endpoints
+
+    def __rich_console__(self, console: Console, options: ConsoleOptions) -> RenderResult:
+        yield _render(self.plant, self.endpoints, options.max_width)
 
 
-def render(plant: Plant, endpoints: list[str]) -> Group:
+def render(plant: Plant, endpoints: list[str]) -> LiveView:
     """A rich renderable: the PLC rack and its modules, the TES, the endpoints."""
-    parts: list[Any] = [
+    return LiveView(plant, endpoints)
+
+
+def _render(plant: Plant, endpoints: list[str], width: int) -> Group:
+    parts: list[Table | Text] = [
         Text(f"{plant.title}   t = {plant.clock.now / S:,.1f} s   speed {_speed(plant)}", "bold")
     ]
-    plc = plant.plc
-    if plc is not None:
-        table = Table(title=f"{plc.model.name} {'RUN' if plc.running else 'STOP'}", expand=True)
-        for col in ("slot", "module", "mode", "OK", "ERR", "F", "I,S", "IW0..IW7", "I F..0"):
-            table.add_column(col, no_wrap=col != "module")
-        for module in plc.modules:
-            image = plc.image(module.rack, module.slot)
-            leds = module.leds
-            table.add_row(
-                module.address,
-                module.type_name,
-                mode(module),
-                _led(leds.get("OK", "off") != "off", "green"),
-                _led(leds.get("ERR", "off") != "off", "red"),
-                _led(leds.get("F", "off") != "off", "red"),
-                str(int(image.fault)),
-                " ".join(f"{w:04X}" for w in image.iw),
-                f"{image.i_bits:016b}",
-            )
-        parts.append(table)
-    if plant.tes:
-        tes_table = Table(title="TES remote I/O", expand=True)
-        for col in ("slave", "model", "status"):
-            tes_table.add_column(col)
-        for tes in plant.tes:
-            tes_table.add_row(str(tes.slave), tes.model.name, tes_status(tes))
-        parts.append(tes_table)
-    parts.extend(Text(line, "cyan") for line in endpoints)
+    if plant.plc is not None:
+        plc = plant.plc
+        title = f"{plc.model.name} {'RUN' if plc.running else 'STOP'}"
+        parts.append(_modules(plant, _module_devices(plant), title, width))
+    tes = [d for d in plant.devices if isinstance(d.address, TesAddress)]
+    if tes:
+        parts.append(_tes_table(tes, width))
+    parts.extend(Text(line, "cyan", overflow="fold") for line in endpoints)
     parts.append(Text("Ctrl-C to stop", "dim"))
     return Group(*parts)
 
 
-def mode(module: Any) -> str:
-    """Run / Stop for a module that has them, else its state (self-test, off...)."""
-    if module.running:
-        return "Run"
-    if module.has_run_stop and module.state is ModuleState.OPERATIONAL:
-        return "Stop"
-    return str(module.state.value)
+def _table(title: str, width: int) -> Table:
+    compact = width < WIDE
+    return Table(
+        title=title,
+        expand=not compact,
+        box=box.SIMPLE_HEAD if compact else box.HEAVY_HEAD,
+        padding=(0, 1) if not compact else (0, 0, 0, 1),
+        show_edge=not compact,
+    )
 
 
-def tes_status(tes: Any) -> str:
-    """Power, status word and LEDs of a TES, on one line."""
-    if not tes.powered:
-        return "off"
-    leds = " ".join(f"{name}={state}" for name, state in tes.leds.items())
-    return f"on  status {format_hex(tes.status_word())}  {leds}"
+def _modules(plant: Plant, modules: list[Device], title: str, width: int) -> Table:
+    table = _table(title, width)
+    wide, medium = width >= WIDE, MEDIUM <= width < WIDE
+    leds = ["OK", "ERR", "F"] if wide else ["LEDs"]
+    words = "IW0..IW7" if width >= MEDIUM else "IW0..3 / IW4..7"
+    for col in ("slot", "module", "mode", *leds, "I,S", words, "I F..0" if wide else "I"):
+        table.add_column(col, no_wrap=True)
+    assert plant.plc is not None
+    for device in modules:
+        status = device.status()
+        rack, slot = _rack_slot(device)
+        image = plant.plc.image(rack, slot)
+        iw = [f"{w:04X}" for w in image.iw]
+        shown = " ".join(iw) if wide or medium else " ".join(iw[:4]) + "\n" + " ".join(iw[4:])
+        lights = [_led(name, state) for name, state in status.leds] if wide else [_leds(status)]
+        bits = f"{image.i_bits:016b}" if wide else f"{image.i_bits:04X}"
+        table.add_row(
+            status.address, status.kind, mode(status), *lights, str(int(image.fault)), shown, bits
+        )
+    return table
+
+
+def _tes_table(devices: list[Device], width: int) -> Table:
+    table = _table("TES remote I/O", width)
+    for col in ("endpoint", "slave", "model", "status", "LEDs"):
+        table.add_column(col, no_wrap=col != "endpoint", overflow="fold")
+    for device in devices:
+        address = device.address
+        assert isinstance(address, TesAddress)
+        status = device.status()
+        word = dict(status.details).get("status", "")
+        table.add_row(
+            address.endpoint,
+            str(address.slave),
+            status.kind,
+            f"{status.state} {word}".strip(),
+            _leds(status),
+        )
+    return table
+
+
+def _module_devices(plant: Plant) -> list[Device]:
+    """Every module in the PLC's slots (one inserted from Python too), in slot order."""
+    if plant.plc is None:
+        return []
+    return [plant.module_device(m.rack, m.slot) for m in plant.plc.modules]
+
+
+def _rack_slot(device: Device) -> tuple[int, int]:
+    address = device.address
+    assert not isinstance(address, TesAddress)
+    return address.rack, address.slot
+
+
+def _led(name: str, state: str) -> Text:
+    mark, colour = _LIT.get(state, ("?", "magenta"))
+    if state == "on" and name in _ALARM:
+        colour = "red"
+    return Text(mark, style=colour)
+
+
+def _leds(status: DeviceStatus) -> Text:
+    text = Text()
+    for index, (name, state) in enumerate(status.leds):
+        if index:
+            text.append(" ")
+        text.append_text(_led(name, state))
+        text.append(name, style="" if state != "off" else "dim")
+    return text
+
+
+def mode(status: DeviceStatus) -> str:
+    """Run / Stop for a device that has them, else its state (self-test, off...)."""
+    return status.mode if status.mode is not None else status.state
+
+
+def tes_line(device: Device) -> str:
+    """``TES 1 TES 32EST: on  status H'0009'  Pwr=on ...  at tcp://...``: one TES, one line."""
+    address = device.address
+    assert isinstance(address, TesAddress)
+    status = device.status()
+    head = f"TES {address.slave} {status.kind}: "
+    if status.state == "off":
+        return f"{head}off  at {address.endpoint}"
+    word = dict(status.details).get("status", "")
+    return f"{head}on  status {word}  {status.leds_text()}  at {address.endpoint}"
 
 
 def _speed(plant: Plant) -> str:
@@ -77,17 +160,16 @@ def _speed(plant: Plant) -> str:
 
 
 def plain_status(plant: Plant) -> list[str]:
-    """One line per module: for logs and non-terminal output."""
+    """One line per device: for logs and non-terminal output."""
     lines = [f"t = {plant.clock.now / S:.3f} s"]
     plc = plant.plc
-    if plc is not None:
-        for module in plc.modules:
-            image = plc.image(module.rack, module.slot)
-            words = " ".join(format_hex(w) for w in image.iw)
-            lines.append(
-                f"slot {module.address} {module.type_name}:"
-                f" {mode(module)} {module.led_text} IW {words}"
-            )
-    for tes in plant.tes:
-        lines.append(f"TES {tes.slave} {tes.model.name}: {tes_status(tes)}")
+    for device in _module_devices(plant):
+        assert plc is not None
+        status = device.status()
+        rack, slot = _rack_slot(device)
+        words = " ".join(f"H'{w:04X}'" for w in plc.image(rack, slot).iw)
+        lines.append(
+            f"slot {status.address} {status.kind}: {mode(status)} {status.leds_text()} IW {words}"
+        )
+    lines.extend(tes_line(d) for d in plant.devices if isinstance(d.address, TesAddress))
     return lines

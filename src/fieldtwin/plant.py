@@ -16,9 +16,13 @@ Fixed keys (tests outside the project rely on them)::
     slave = 1
     endpoint = "tcp://127.0.0.1:5020"
 
-Every other key of a ``[[module]]`` table goes to that module's
-``configure_from_plant``; ``[[tes]]`` tables go to ``fieldtwin.tes.plant``.
-Errors name the file and the field path: ``plant.toml: module[1].slot: ...``.
+Every ``[[module]]`` and ``[[tes]]`` table is checked against its kind's schema
+(fieldtwin.devices: one registry of kinds, one schema each) and built with one
+build context (clock, PLC, base directory); wiring between devices (a DEM's
+sync output) is done once every device is in.  Endpoints are opened after the
+plant is built, by the runtime's binder (fieldtwin.runtime.binder):
+``load_plant`` binds the module ports (SCM channels), ``fieldtwin run`` binds
+every port.  Errors name the file and the field path: ``plant.toml: module[1].slot: ...``.
 """
 
 from __future__ import annotations
@@ -29,11 +33,22 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 from fieldtwin.clock import SimClock
+from fieldtwin.devices import registry
+from fieldtwin.devices.context import BuildContext
+from fieldtwin.devices.face import Device, Family
+from fieldtwin.devices.module import ModuleDevice
+from fieldtwin.devices.schema import table_at
+from fieldtwin.devices.tes import TesDevice
 from fieldtwin.errors import ConfigError
+from fieldtwin.tes.model import Tes
 from fieldtwin.tsx.plc import MODELS, Plc
+
+if TYPE_CHECKING:
+    from fieldtwin.runtime.binder import Binding
+    from fieldtwin.runtime.runner import Runner
 
 DEFAULT_PLANT = "default.toml"
 FROM_PLANT = "from plant"  # build_plant(speed=FROM_PLANT): take [run] speed
@@ -45,7 +60,7 @@ class PlantFile:
     """A parsed, not yet built, plant file."""
 
     name: str  # what errors call it: the path, or "<default plant>"
-    data: Mapping[str, Any]
+    data: Mapping[str, object]
     base_dir: Path
 
 
@@ -57,31 +72,71 @@ class Plant:
     title: str
     clock: SimClock
     plc: Plc | None
-    tes: list[Any] = field(default_factory=list)
-    tes_tables: list[Mapping[str, Any]] = field(default_factory=list)
-    servers: list[Any] = field(default_factory=list)
+    devices: list[Device] = field(default_factory=list)  # in file order: modules, then TES
     speed: float | None = 1.0
+    bindings: list[Binding] = field(default_factory=list)
 
-    def tes_by_slave(self, slave: int) -> Any:
-        found = [t for t in self.tes if t.slave == slave]
+    # --- devices -----------------------------------------------------------
+
+    @property
+    def tes_devices(self) -> list[TesDevice]:
+        return [d for d in self.devices if isinstance(d, TesDevice)]
+
+    @property
+    def tes(self) -> list[Tes]:
+        """The TES cores, in file order (Python users and tests reach them so)."""
+        return [d.tes for d in self.tes_devices]
+
+    def module_device(self, rack: int, slot: int) -> ModuleDevice:
+        """The module in rack/slot (one inserted from Python gets the generic face)."""
+        for device in self.devices:
+            if isinstance(device, ModuleDevice) and (device.module.rack, device.module.slot) == (
+                rack,
+                slot,
+            ):
+                return device
+        if self.plc is None:
+            raise ConfigError("this plant has no PLC (add a [plc] table or [[module]] tables)")
+        return ModuleDevice(self.plc.module(rack, slot), self.plc)
+
+    def tes_device(self, slave: int, endpoint: str | None = None) -> TesDevice:
+        """The TES answering ``slave`` (on ``endpoint`` when given); two on different
+        endpoints with that number need the endpoint."""
+        found = [
+            d
+            for d in self.tes_devices
+            if d.tes.slave == slave and (endpoint is None or d.endpoint == endpoint)
+        ]
+        if len(found) == 1:
+            return found[0]
+        have = ", ".join(str(d.address) for d in self.tes_devices) or "none"
         if not found:
-            have = ", ".join(str(t.slave) for t in self.tes) or "none"
-            raise ConfigError(f"no TES with slave number {slave} in this plant (have: {have})")
-        return found[0]
+            where = f" on {endpoint}" if endpoint is not None else ""
+            raise ConfigError(
+                f"no TES with slave number {slave}{where} in this plant (have: {have})"
+            )
+        raise ConfigError(
+            f"slave number {slave} answers on {len(found)} endpoints: name the endpoint,"
+            f" e.g. tes {found[0].endpoint} {slave} ... (have: {have})"
+        )
 
-    def start_endpoints(self, runner: Any) -> list[str]:
+    def tes_by_slave(self, slave: int) -> Tes:
+        return self.tes_device(slave).tes
+
+    # --- endpoints ------------------------------------------------------------
+
+    def start_endpoints(self, runner: Runner) -> list[str]:
         """Open the TES Modbus endpoints; returns one 'listening: ...' line each."""
-        if not self.tes:
-            return []
-        from fieldtwin.tes.plant import start_tes_endpoints
+        from fieldtwin.runtime.binder import MODBUS, bind
 
-        self.servers = list(start_tes_endpoints(self.tes, self.tes_tables, runner))
-        return [server.describe() for server in self.servers]
+        binding = bind(self.devices, runner, groups=(MODBUS,))
+        self.bindings.append(binding)
+        return binding.lines
 
     def close(self) -> None:
-        for server in self.servers:
-            server.close()
-        self.servers.clear()
+        for binding in self.bindings:
+            binding.close()
+        self.bindings.clear()
 
 
 def read_plant(path: str | Path | None) -> PlantFile:
@@ -115,10 +170,10 @@ def build_plant(
     plant_file: PlantFile,
     *,
     clock: SimClock | None = None,
-    runner: Any = None,
+    runner: Runner | None = None,
     speed: float | str | None = FROM_PLANT,
 ) -> Plant:
-    """Build the PLC, modules and TES of a plant file (endpoints are opened later).
+    """Build the PLC, modules and TES of a plant file (no endpoint is opened).
 
     ``speed``: a factor, None for as fast as possible, or FROM_PLANT for ``[run] speed``.
     """
@@ -127,17 +182,39 @@ def build_plant(
     pace = plant_speed(plant_file) if speed == FROM_PLANT else speed
     assert not isinstance(pace, str)
     title = str(_table(data, "plant", name).get("name", Path(name).stem))
-    plc = _build_plc(plant_file, clock, runner, pace)
-    plant = Plant(name, title, clock, plc, speed=pace)
-    tes_tables = data.get("tes", [])
-    if not isinstance(tes_tables, list):
-        raise ConfigError(f"{name}: tes must be an array of tables ([[tes]])")
-    if tes_tables:
-        from fieldtwin.tes.plant import build_tes
+    plc, outputs = _build_plc(plant_file, clock, runner, pace)
+    ctx = BuildContext(clock, plc, plant_file.base_dir, name)
+    for key, family in (("module", Family.MODULE), ("tes", Family.TES)):
+        for index, table in enumerate(_array(data, key, name)):
+            ctx.devices.append(_build_device(table, family, ctx, f"{name}: {key}[{index}]"))
+    ctx.finish()
+    if plc is not None:
+        _initial_outputs(plc, outputs, f"{name}: plc.outputs")
+    return Plant(name, title, clock, plc, list(ctx.devices), speed=pace)
 
-        plant.tes = list(build_tes(tes_tables, clock, name, plant_file.base_dir))
-        plant.tes_tables = tes_tables
-    return plant
+
+def _array(data: Mapping[str, object], key: str, name: str) -> list[object]:
+    tables = data.get(key, [])
+    if not isinstance(tables, list):
+        raise ConfigError(f"{name}: {key} must be an array of tables ([[{key}]])")
+    return tables
+
+
+def _build_device(table: object, family: Family, ctx: BuildContext, where: str) -> Device:
+    """One table -> one device of its kind (schema checked first)."""
+    key = "type" if family is Family.MODULE else "model"
+    checked = table_at(table, where)
+    kind_name = checked.get(key)
+    if not isinstance(kind_name, str):
+        example = '"TSX AEM 811"' if family is Family.MODULE else "TES 16EST, TES 8EA, ..."
+        if family is Family.MODULE:
+            raise ConfigError(f"{where}.type: missing or not a string (e.g. {example})")
+        raise ConfigError(f"{where}.model: missing (allowed: {example})")
+    try:
+        kind = registry.kind_named(kind_name, family)
+    except ConfigError as exc:
+        raise ConfigError(f"{where}.{key}: {exc}") from None
+    return kind.build(kind.schema.check(checked, where, kind.name), ctx, where)
 
 
 def plant_speed(plant_file: PlantFile) -> float | None:
@@ -152,38 +229,55 @@ def plant_speed(plant_file: PlantFile) -> float | None:
     return _speed(run.get("speed", 1.0), f"{name}: run.speed")
 
 
-def load_plant(path: str | Path | None = None, **kwargs: Any) -> Plant:
-    return build_plant(read_plant(path), **kwargs)
+def load_plant(
+    path: str | Path | None = None,
+    *,
+    clock: SimClock | None = None,
+    runner: Runner | None = None,
+    speed: float | str | None = FROM_PLANT,
+) -> Plant:
+    """Read and build a plant, and open its module ports (SCM channels) through the binder.
+
+    The TES Modbus endpoints stay closed until ``plant.start_endpoints(runner)``:
+    the console and Python are the TES's master themselves.
+    """
+    from fieldtwin.runtime.binder import SERIAL_LINE, bind
+
+    plant = build_plant(read_plant(path), clock=clock, runner=runner, speed=speed)
+    try:
+        plant.bindings.append(bind(plant.devices, runner, groups=(SERIAL_LINE,)))
+    except BaseException:
+        plant.close()
+        raise
+    return plant
 
 
-def _table(data: Mapping[str, Any], key: str, name: str) -> Mapping[str, Any]:
+def _table(data: Mapping[str, object], key: str, name: str) -> Mapping[str, object]:
     value = data.get(key, {})
     if not isinstance(value, Mapping):
         raise ConfigError(f"{name}: {key} must be a table ([{key}])")
     return value
 
 
-def _speed(value: Any, where: str) -> float | None:
+def _speed(value: object, where: str) -> float | None:
     if value == "max":
         return None
-    number = isinstance(value, int | float) and not isinstance(value, bool)
-    if not number or not 0 < value < math.inf:
+    if isinstance(value, bool) or not isinstance(value, int | float) or not 0 < value < math.inf:
         raise ConfigError(f'{where}: {value!r} not allowed (allowed a number > 0, or "max")')
     return float(value)
 
 
 def _build_plc(
-    plant_file: PlantFile, clock: SimClock, runner: Any, speed: float | None
-) -> Plc | None:
+    plant_file: PlantFile, clock: SimClock, runner: Runner | None, speed: float | None
+) -> tuple[Plc | None, object]:
+    """The PLC of ``[plc]`` (or of a plant with modules), and its ``outputs`` table."""
     data, name = plant_file.data, plant_file.name
-    modules = data.get("module", [])
-    if not isinstance(modules, list):
-        raise ConfigError(f"{name}: module must be an array of tables ([[module]])")
+    modules = _array(data, "module", name)
     if "plc" not in data and not modules:
-        return None
+        return None, {}
     plc_table = dict(_table(data, "plc", name))
     model = plc_table.pop("model", "TSX 87")
-    if model not in MODELS:
+    if not isinstance(model, str) or model not in MODELS:
         raise ConfigError(
             f"{name}: plc.model: {model!r} not allowed (allowed: {', '.join(MODELS)})"
         )
@@ -200,14 +294,10 @@ def _build_plc(
             f"{name}: plc: unknown key(s) {', '.join(sorted(plc_table))}"
             " (allowed: model, scan_ms, outputs)"
         )
-    plc = Plc(model=model, scan_ms=scan_ms, clock=clock, runner=runner, speed=speed)
-    for index, table in enumerate(modules):
-        _insert(plc, table, f"{name}: module[{index}]", plant_file.base_dir)
-    _initial_outputs(plc, outputs, f"{name}: plc.outputs")
-    return plc
+    return Plc(model=model, scan_ms=scan_ms, clock=clock, runner=runner, speed=speed), outputs
 
 
-def _initial_outputs(plc: Plc, outputs: Any, where: str) -> None:
+def _initial_outputs(plc: Plc, outputs: object, where: str) -> None:
     """``[plc] outputs = { "OW5,0,C" = 1 }``: what the PLC program writes from the start."""
     if not isinstance(outputs, Mapping):
         raise ConfigError(f'{where}: must be a table of objects, e.g. {{ "OW5,0,C" = 1 }}')
@@ -218,38 +308,3 @@ def _initial_outputs(plc: Plc, outputs: Any, where: str) -> None:
             plc.write(obj, value)
         except ConfigError as exc:
             raise ConfigError(f"{where}.{obj!r}: {exc}") from None
-
-
-def _int_field(table: Mapping[str, Any], key: str, where: str, default: int | None = None) -> int:
-    value = table.get(key, default)
-    if value is None:
-        raise ConfigError(f"{where}.{key}: missing (an integer is required)")
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise ConfigError(f"{where}.{key}: {value!r} is not an integer")
-    return value
-
-
-def _insert(plc: Plc, table: Any, where: str, base_dir: Path) -> None:
-    if not isinstance(table, Mapping):
-        raise ConfigError(f"{where}: must be a table")
-    rest = dict(table)
-    type_name = rest.pop("type", None)
-    if not isinstance(type_name, str):
-        raise ConfigError(f'{where}.type: missing or not a string (e.g. "TSX AEM 811")')
-    rack = _int_field(rest, "rack", where, 0)
-    slot = _int_field(rest, "slot", where)
-    code = rest.get("code")
-    code = None if code is None else _int_field(rest, "code", where)
-    for key in ("rack", "slot", "code"):
-        rest.pop(key, None)
-    try:
-        module = plc.insert(type_name, rack=rack, slot=slot, code=code)
-    except ConfigError as exc:
-        text = str(exc)
-        field_name = "type" if "module type" in text else "rack" if "rack" in text else "slot"
-        raise ConfigError(f"{where}.{field_name}: {exc}") from None
-    try:
-        module.configure_from_plant(rest, where, base_dir)
-    except ConfigError as exc:
-        message = str(exc)
-        raise ConfigError(message if message.startswith(where) else f"{where}: {message}") from None

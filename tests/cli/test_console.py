@@ -223,3 +223,71 @@ def test_tes_digital_input_takes_0_and_1(tmp_path: Path) -> None:
     status = console.execute("status")
     assert status[0] == "t = 0.000 s"
     assert status[1].startswith("TES 1 TES 32EST: on  status H'")
+
+
+def test_an_interrupted_advance_stops_between_two_steps(tmp_path: Path) -> None:
+    # issue 10 item 20: the terminal's Ctrl-C is asked between two 100 ms steps
+    path = tmp_path / "plant.toml"
+    path.write_text("[plc]\n")
+    plant = load_plant(path)
+    asked: list[int] = []
+    seen: list[str] = []
+
+    def ask() -> bool:
+        asked.append(plant.clock.now)
+        return len(asked) > 3
+
+    console = Console(plant, interrupted=ask, progress=seen.append)
+    assert console.execute("advance 10") == ["interrupted  t = 0.400 s"]
+    assert asked == [100_000, 200_000, 300_000, 400_000]
+    assert seen == ["advancing to t = 10.000 s (Ctrl-C interrupts)"]
+    assert console.execute("time") == ["t = 0.400 s"]  # the plant as it stood
+
+
+def test_tes_verbs_are_the_module_verbs(tmp_path: Path) -> None:
+    # issue 9: input, signal, fault, faults, status and leds the same on a TES and a module;
+    # a TES named by endpoint and slave where the slave number alone is ambiguous
+    path = tmp_path / "tes.toml"
+    path.write_text(
+        '[plc]\n[[tes]]\nmodel = "TES 32ET-S"\nslave = 1\nendpoint = "tcp://127.0.0.1:0"\n'
+        '[[tes]]\nmodel = "TES 8EA"\nslave = 1\nendpoint = "pty"\n'
+    )
+    console = Console(load_plant(path))
+    with pytest.raises(ConfigError, match="slave number 1 answers on 2 endpoints: name the"):
+        console.execute("tes 1 read 0")
+    tes = "tes tcp://127.0.0.1:0 1"
+    assert console.execute(f"{tes} input 3 on") == [f"{tes} input 3 = on"]
+    assert console.execute(f"{tes} fault short_2 on") == [f"{tes} fault short_2 on"]
+    assert "short_2: input 2: short circuit" in console.execute(f"{tes} faults")
+    assert console.execute(f"{tes} leds") == ["Pwr=on Run=on Prm=off Wdg=off"]
+    assert console.execute("tes pty 1 signal a0 sine offset=5 amplitude=1 period_s=10") == [
+        "tes pty 1 signal a0 = sine"
+    ]
+    assert console.execute("tes pty 1 fault power on") == ["tes pty 1 fault power on"]
+    assert console.execute("tes pty 1 status") == ["TES 1 TES 8EA: off  at pty"]
+    status = console.execute("status")
+    assert status[-2].startswith("TES 1 TES 32ET-S: on  status H'")
+    assert (
+        status[-2].endswith("at tcp://127.0.0.1:0") and status[-1] == "TES 1 TES 8EA: off  at pty"
+    )
+    with pytest.raises(ConfigError, match=r"TES 8EA: no analog input 9 \(allowed: 0, 1"):
+        console.execute("tes pty 1 input a9 1.0")
+    with pytest.raises(
+        ConfigError, match=r"unknown fault 'smoke' for TES 8EA pty 1 \(allowed: power"
+    ):
+        console.execute("tes pty 1 fault smoke on")
+    with pytest.raises(ConfigError, match=r"input 3: 'maybe' not allowed \(allowed 1/0, on/off"):
+        console.execute(f"{tes} input 3 maybe")
+
+
+def test_peek_has_no_side_effect_and_read_has_a_masters(tmp_path: Path) -> None:
+    # issue 10 item 19: `tes N read` is a master read (its side effects), `peek` has none
+    path = tmp_path / "tes.toml"
+    path.write_text('[[tes]]\nmodel = "TES 32EST"\nslave = 1\nendpoint = "pty"\n')
+    console = Console(load_plant(path))
+    for line in ("tes 1 input 3 1", "advance 100ms", "tes 1 input 3 0", "advance 100ms"):
+        console.execute(line)
+    peeked = console.execute("tes 1 peek H'001'")
+    assert console.execute("tes 1 peek H'001'") == peeked  # nothing consumed
+    assert console.execute("tes 1 read H'001'") == ["tes 1 H'001' = H'0008'"]  # memorized
+    assert console.execute("tes 1 read H'001'") == ["tes 1 H'001' = H'0000'"]  # consumed

@@ -56,3 +56,41 @@ def test_run_rejects_non_finite_times(argv: list[str], capsys: pytest.CaptureFix
         main(argv)
     assert info.value.code == 2
     assert argv[-1] in capsys.readouterr().err
+
+
+def _screen(plant: object, width: int) -> list[str]:
+    screen = RichConsole(record=True, width=width, file=io.StringIO(), color_system=None)
+    screen.print(render(plant, ["listening: modbus-tcp tcp://127.0.0.1:5020 slaves 1,2"]))  # type: ignore[arg-type]
+    return screen.export_text().splitlines()
+
+
+@pytest.mark.parametrize("width", [80, 100, 200])
+def test_live_view_reads_well_at_80_100_and_200_columns(tmp_path: Path, width: int) -> None:
+    # issue 10 item 15: below ~130 columns the module column went, LEDs blanked, words were cut
+    plant = load_plant(default_plant_copy(tmp_path), speed=None)
+    assert plant.plc is not None
+    plant.plc.advance(12.0)
+    lines = _screen(plant, width)
+    text = "\n".join(lines)
+    assert all(len(line) <= width for line in lines)
+    assert "…" not in text  # nothing cut
+    rows = {
+        "TSX DEM 2412": ("4", "Stop", "0008"),
+        "TSX AEM 811": ("5", "Run", "1008"),
+        "TSX SCM 2111": ("7", "operational", "0008"),
+    }
+    for kind, (slot, mode, iw0) in rows.items():
+        (row,) = [line for line in lines if f" {kind} " in line]
+        words = row.replace("│", " ").split()
+        assert words[0] == slot and mode in words and iw0 in words, row
+        if width < 130:
+            assert "●OK" in row and "○ERR" in row and "○F" in row, row
+        else:
+            assert row.count("●") == 1 and row.count("○") == 2, row
+    for slave, model in (("1", "TES 32EST"), ("2", "TES 8EA")):
+        (row,) = [line for line in lines if model in line]
+        assert "tcp://127.0.0.1:" in row and f" {slave} " in row and "●Pwr" in row, row
+    assert "listening: modbus-tcp" in text and lines[-1].strip() == "Ctrl-C to stop"
+    if width == 80:
+        assert len(lines) <= 24  # the default plant fits an 80 x 24 terminal
+    plant.close()

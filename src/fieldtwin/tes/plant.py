@@ -38,12 +38,18 @@ def build_tes(
     tables: Sequence[Mapping[str, Any]], clock: SimClock, where: str, base_dir: Path
 ) -> list[Tes]:
     """Validate every ``[[tes]]`` table and build its TES on ``clock``."""
-    built = [_build(table, clock, f"{where}: tes[{i}]", base_dir) for i, table in enumerate(tables)]
-    _check_lines(built, tables, where)
+    built = [
+        build_one(table, clock, f"{where}: tes[{i}]", base_dir) for i, table in enumerate(tables)
+    ]
+    check_lines(built, tables, where)
     return built
 
 
-def _build(table: Mapping[str, Any], clock: SimClock, at: str, base_dir: Path) -> Tes:
+def build_one(
+    table: Mapping[str, Any], clock: SimClock, at: str, base_dir: Path, *, signals: bool = True
+) -> Tes:
+    """One ``[[tes]]`` table; ``signals=False`` leaves ``inputs`` to the caller (the plant
+    builder sets them through the Device face, fieldtwin.devices.tes)."""
     if not isinstance(table, Mapping):
         raise ConfigError(f"{at}: not a table (allowed keys: {', '.join(KEYS)})")
     unknown = sorted(set(table) - set(KEYS))
@@ -68,8 +74,11 @@ def _build(table: Mapping[str, Any], clock: SimClock, at: str, base_dir: Path) -
         tes = Tes(model, slave, clock=clock, store=path, prm_jumper=prm, name=name, link=link)
     except ConfigError as exc:
         raise ConfigError(f"{at}: {exc}") from None
-    _inputs(tes, table.get("inputs", {}), f"{at}.inputs", base_dir)
-    _faults(tes, table.get("faults", {}), f"{at}.faults")
+    if signals:
+        _inputs(tes, table.get("inputs", {}), f"{at}.inputs", base_dir)
+    faults = table.get("faults", {})
+    if not isinstance(faults, list):  # a list of fault names: the Device face's
+        _faults(tes, faults, f"{at}.faults")
     return tes
 
 
@@ -172,7 +181,7 @@ def _int_list(value: object, at: str) -> list[int]:
     return list(value)
 
 
-def _check_lines(built: list[Tes], tables: Sequence[Mapping[str, Any]], where: str) -> None:
+def check_lines(built: list[Tes], tables: Sequence[Mapping[str, Any]], where: str) -> None:
     """Two TES answering the same number on one line would both reply."""
     seen: dict[tuple[str, int], int] = {}
     ports: dict[str, int] = {}

@@ -1,23 +1,28 @@
-"""Module types by the names users write (``type = "TSX AEM 811"``).
+"""Module classes by the names users write (``type = "TSX AEM 811"``), for ``Plc.insert``.
 
-Each device package exposes ``MODULE_TYPES: Mapping[str, type[IntelligentModule]]``;
-they are imported lazily so that a plant only loads the modules it uses.
+Every sub-package of ``fieldtwin.tsx`` that exposes
+``MODULE_TYPES: Mapping[str, type[IntelligentModule]]`` is found by looking
+(no list to keep), lazily so that a plant only loads what it uses;
+``register`` adds a class from elsewhere (the device registry,
+``fieldtwin.devices.registry``, gives it every module kind it knows, and tests
+their doubles).
 """
 
 from __future__ import annotations
 
 import importlib
+import pkgutil
 from collections.abc import Mapping
 from typing import Any
 
+import fieldtwin.tsx
 from fieldtwin.errors import ConfigError
 
-PROVIDERS = ("fieldtwin.tsx.aem811", "fieldtwin.tsx.dem24", "fieldtwin.tsx.scm")
 _extra: dict[str, Any] = {}
 
 
 def register(type_name: str, cls: Any) -> None:
-    """Add a module type (tests use this for their test double)."""
+    """Add a module type (the device registry, and tests for their test double)."""
     _extra[_norm(type_name)] = cls
 
 
@@ -25,15 +30,18 @@ def _norm(name: str) -> str:
     return " ".join(name.upper().split())
 
 
+def _providers() -> list[str]:
+    return [
+        f"fieldtwin.tsx.{info.name}"
+        for info in pkgutil.iter_modules(fieldtwin.tsx.__path__)
+        if info.ispkg
+    ]
+
+
 def module_types() -> dict[str, Any]:
     types: dict[str, Any] = {}
-    for provider in PROVIDERS:
-        try:
-            package = importlib.import_module(provider)
-        except ModuleNotFoundError as exc:
-            if exc.name != provider:
-                raise
-            continue
+    for provider in _providers():
+        package = importlib.import_module(provider)
         found: Mapping[str, Any] = getattr(package, "MODULE_TYPES", {})
         types.update({_norm(k): v for k, v in found.items()})
     types.update(_extra)

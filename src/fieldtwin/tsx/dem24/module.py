@@ -57,7 +57,7 @@ from fieldtwin.tsx.dem24.stack import (
     change_body,
     overall_body,
 )
-from fieldtwin.tsx.dem24.sync import SYNC_OUTPUT_MAX, PulseSource, announce
+from fieldtwin.tsx.dem24.sync import SYNC_OUTPUT_MAX, PulseSource
 from fieldtwin.tsx.dem24.syncinput import SYNC_PULSE_US, SyncInput, check_width
 from fieldtwin.tsx.dem24.timebase import SyncOutcome, Timebase
 from fieldtwin.tsx.module import FaultCategory, IntelligentModule, ModuleContext, ModuleState
@@ -107,8 +107,6 @@ class Dem24(IntelligentModule):
         self.pulse_source: PulseSource | None = None
         self.plant_startup: list[Any] = []  # requests the plant file applies after self-test
         self.edges_stamped = 0
-        for follower in announce(self.clock, self, rack, slot):
-            self.connect_sync_output(follower)  # type: ignore[arg-type]
 
     # --- the parts, for inspection ----------------------------------------------------
 

@@ -7,9 +7,9 @@ rack = 0
 slot = 4
 inputs = { "0" = true, "1" = 24.0, "2" = { kind = "pulse", period_s = 2.0 } }
 sync = { period_s = 30 }            # or { period_s = 60, start_s = 0.5 }, or { from_slot = 3 }
-time = "1994-07-15T18:05:33"        # sent as a request 2 after each self-test
+time = "1994-07-15T18:05:33"        # sent as a request 2 after the first self-test
 time_indicator = 1
-config = ["H'0014'", 10, 5, 3, 5, 2, 60, 500, 60]   # a request H'40' after each self-test
+config = ["H'0014'", 10, 5, 3, 5, 2, 60, 500, 60]   # a request H'40' after the first self-test
 clock_drift_ppm = 10.0
 faults = ["terminal_block"]
 ```
@@ -17,7 +17,7 @@ faults = ["terminal_block"]
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -27,7 +27,6 @@ from fieldtwin.signals import signal_from_spec
 from fieldtwin.tsx.dem24.civil import parse_iso
 from fieldtwin.tsx.dem24.config import Refusal, check_config
 from fieldtwin.tsx.dem24.inputs import CHANNELS
-from fieldtwin.tsx.dem24.sync import find_or_wait
 from fieldtwin.tsx.dem24.timebase import TimeReference
 from fieldtwin.words import parse_word
 
@@ -52,7 +51,18 @@ def console_value(text: str) -> bool | float:
         ) from None
 
 
-def configure(mod: Dem24, table: Mapping[str, Any], where: str, base_dir: Path) -> None:
+WireSync = Callable[[int, int], None]  # (from_rack, from_slot): done by the plant builder
+
+
+def configure(
+    mod: Dem24,
+    table: Mapping[str, Any],
+    where: str,
+    base_dir: Path,
+    wire_sync: WireSync | None = None,
+) -> None:
+    """The DEM keys; ``sync = { from_slot }`` needs ``wire_sync`` (the plant finds the partner
+    through its PLC once every module is in: fieldtwin.devices.dem24)."""
     unknown = sorted(set(table) - set(KEYS))
     if unknown:
         raise ConfigError(
@@ -62,7 +72,7 @@ def configure(mod: Dem24, table: Mapping[str, Any], where: str, base_dir: Path) 
         mod.set_clock_drift(_number(table["clock_drift_ppm"], f"{where}.clock_drift_ppm"))
     _inputs(mod, table.get("inputs", {}), f"{where}.inputs", base_dir)
     if "sync" in table:
-        _sync(mod, table["sync"], f"{where}.sync")
+        _sync(mod, table["sync"], f"{where}.sync", wire_sync)
     if "config" in table:
         _config(mod, table["config"], f"{where}.config")
     if "time" in table:
@@ -96,7 +106,7 @@ def _inputs(mod: Dem24, spec: Any, where: str, base_dir: Path) -> None:
         mod.set_signal(channel, signal)
 
 
-def _sync(mod: Dem24, spec: Any, where: str) -> None:
+def _sync(mod: Dem24, spec: Any, where: str, wire_sync: WireSync | None) -> None:
     if not isinstance(spec, Mapping):
         raise ConfigError(f"{where}: must be a table ({{ period_s = 30 }} or {{ from_slot = 4 }})")
     rest = dict(spec)
@@ -105,9 +115,9 @@ def _sync(mod: Dem24, spec: Any, where: str) -> None:
         rack = rest.pop("from_rack", 0)
         if rest or not all(isinstance(v, int) and not isinstance(v, bool) for v in (rack, slot)):
             raise ConfigError(f"{where}: from_rack and from_slot take integers, nothing else")
-        source = find_or_wait(mod.clock, rack, slot, mod)
-        if source is not None:
-            source.connect_sync_output(mod)  # type: ignore[attr-defined]
+        if wire_sync is None:
+            raise ConfigError(f"{where}.from_slot: only a plant file wires a sync output")
+        wire_sync(rack, slot)
         return
     period = _number(rest.pop("period_s", None), f"{where}.period_s")
     start = _number(rest.pop("start_s", 0.0), f"{where}.start_s")
@@ -125,7 +135,7 @@ def _config(mod: Dem24, spec: Any, where: str) -> None:
     result = check_config(words)
     if isinstance(result, Refusal):
         raise ConfigError(f"{where}: refused by the module: {result.reason}")
-    mod.plant_startup.append(lambda m, now: m.apply_config(result, now))
+    mod.plant_startup.append(_once(lambda m, now: m.apply_config(result, now)))
 
 
 def _word(value: Any, where: str) -> int:
@@ -143,4 +153,24 @@ def _time(mod: Dem24, table: Mapping[str, Any], where: str) -> None:
     if isinstance(indicator, bool) or not isinstance(indicator, int) or not 0 <= indicator <= 255:
         raise ConfigError(f"{where}.time_indicator: {indicator!r} not allowed (allowed 0..255)")
     ref = TimeReference(civil, indicator)
-    mod.plant_startup.append(lambda m, now: m.timebase.reference(ref, now))
+
+    def reference(m: Dem24, now: int) -> None:
+        m.timebase.reference(ref, now)
+
+    mod.plant_startup.append(_once(reference))
+
+
+Startup = Callable[["Dem24", int], None]
+
+
+def _once(action: Startup) -> Startup:
+    """docs/plant.md: a plant file's configuration is sent at the end of the first initial
+    self-test only; a power break or a reinsertion loses it, as on the module (DEM 2.5-3)."""
+    sent: list[bool] = []
+
+    def send(mod: Dem24, now: int) -> None:
+        if not sent:
+            sent.append(True)
+            action(mod, now)
+
+    return send

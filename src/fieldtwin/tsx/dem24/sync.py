@@ -8,7 +8,6 @@ itself lasts under 10 ms and its rising edge is what the module takes (7.2 note)
 
 from __future__ import annotations
 
-import weakref
 from collections.abc import Callable
 from typing import Protocol
 
@@ -51,26 +50,3 @@ class SyncReceiver(Protocol):
     slot: int
 
     def receive_pulse(self, now: int) -> None: ...
-
-
-# Plant wiring "sync = { from_rack, from_slot }": modules by clock, then by (rack, slot).
-_modules: weakref.WeakKeyDictionary[SimClock, dict[tuple[int, int], object]] = (
-    weakref.WeakKeyDictionary()
-)
-_waiting: weakref.WeakKeyDictionary[SimClock, dict[tuple[int, int], list[object]]] = (
-    weakref.WeakKeyDictionary()
-)
-
-
-def announce(clock: SimClock, module: object, rack: int, slot: int) -> list[object]:
-    """Register a module; returns the modules that asked for its sync output."""
-    _modules.setdefault(clock, {})[(rack, slot)] = module
-    return _waiting.setdefault(clock, {}).pop((rack, slot), [])
-
-
-def find_or_wait(clock: SimClock, rack: int, slot: int, follower: object) -> object | None:
-    """The module at (rack, slot), or None after noting that ``follower`` waits for it."""
-    found = _modules.get(clock, {}).get((rack, slot))
-    if found is None:
-        _waiting.setdefault(clock, {}).setdefault((rack, slot), []).append(follower)
-    return found

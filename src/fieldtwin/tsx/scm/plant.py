@@ -33,7 +33,14 @@ if TYPE_CHECKING:
 CHANNEL_KEYS = ("channel", "endpoint", "config", "signals", "loop")
 
 
-def configure_module(module: ScmModule, table: Mapping[str, Any], where: str) -> None:
+Wiring = list[tuple[int, str, str]]  # (channel, endpoint URL, field path) to bind later
+
+
+def configure_module(
+    module: ScmModule, table: Mapping[str, Any], where: str, wiring: Wiring | None = None
+) -> None:
+    """The SCM keys.  With ``wiring``, channel endpoints are noted there for the runtime's
+    binder (fieldtwin.runtime.binder) instead of being opened now."""
     rest = dict(table)
     if "adaptors" in rest:
         names = rest.pop("adaptors")
@@ -49,7 +56,7 @@ def configure_module(module: ScmModule, table: Mapping[str, Any], where: str) ->
             raise ConfigError(f"{where}.faults: {exc}") from None
     channels = _list(rest.pop("channels", []), f"{where}.channels")
     for index, entry in enumerate(channels):
-        _channel(module, entry, f"{where}.channels[{index}]")
+        _channel(module, entry, f"{where}.channels[{index}]", wiring)
     if rest:
         raise ConfigError(
             f"{where}: unknown key(s) {', '.join(sorted(rest))} for {module.type_name}"
@@ -64,7 +71,7 @@ def _list(value: Any, where: str) -> list[Any]:
     return value
 
 
-def _channel(module: ScmModule, entry: Any, where: str) -> None:
+def _channel(module: ScmModule, entry: Any, where: str, wiring: Wiring | None) -> None:
     if not isinstance(entry, Mapping):
         raise ConfigError(f'{where}: must be a table {{ channel = 0, endpoint = "pty" }}')
     unknown = sorted(set(entry) - set(CHANNEL_KEYS))
@@ -85,7 +92,9 @@ def _channel(module: ScmModule, entry: Any, where: str) -> None:
             module.set_signal(channel, str(name), level)
         except ConfigError as exc:
             raise ConfigError(f"{where}.signals: {exc}") from None
-    if "endpoint" in entry:
+    if "endpoint" in entry and wiring is not None and str(entry["endpoint"]) != "memory":
+        wiring.append((channel, str(entry["endpoint"]), f"{where}.endpoint"))
+    elif "endpoint" in entry:
         try:
             module.attach(channel, str(entry["endpoint"]))
         except ConfigError as exc:

@@ -1,0 +1,203 @@
+"""What the adapter of every TSX module kind shares: identity, status, faults, PL7 objects.
+
+A module adapter wraps the module core the PLC built; everything kind-specific
+(its inputs, its plant keys, its ports) is in that kind's own adapter file.
+``ModuleDevice`` alone is the face of a module class that only the PLC's type
+table knows (tests' doubles): its faults and ``input`` go to the core's own
+``fault_names`` / ``inject_fault`` / ``console_input``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from functools import partial
+
+from fieldtwin.devices.context import BuildContext
+from fieldtwin.devices.face import (
+    DeviceStatus,
+    Family,
+    Fault,
+    Input,
+    InputValue,
+    ModuleAddress,
+    Port,
+    PortState,
+    pick_fault,
+    pick_input,
+)
+from fieldtwin.devices.schema import Key, Schema, Table, integer, optional_integer, string
+from fieldtwin.errors import ConfigError
+from fieldtwin.tsx.addressing import format_object, parse_object
+from fieldtwin.tsx.bus import Leds, ModuleState
+from fieldtwin.tsx.module import IntelligentModule
+from fieldtwin.tsx.plc import Plc
+
+IDENTITY = (
+    Key("type", 'the module type, e.g. "TSX AEM 811"'),
+    Key("rack", "rack number (default 0)"),
+    Key("slot", "slot number"),
+    Key("code", "the code the slot is declared with (optional)"),
+)
+
+
+class PlcObjects:
+    """A module's PL7 objects as the PLC program sees them (no side effects)."""
+
+    def __init__(self, plc: Plc, address: ModuleAddress) -> None:
+        self._plc = plc
+        self._address = address
+
+    def names(self) -> list[str]:
+        a = self._address
+        words = [f"{kind}{a},{i}" for kind in ("IW", "OW") for i in range(8)]
+        return [*words, f"I{a},S"]
+
+    def read(self, name: str) -> int:
+        self._own(name)
+        return self._plc.read(name)
+
+    def peek(self, name: str) -> int:
+        return self.read(name)  # a PL7 object read by the program has no side effect
+
+    def write(self, name: str, value: int) -> None:
+        self._own(name)
+        self._plc.write(name, value)
+
+    def _own(self, name: str) -> None:
+        ref = parse_object(name)
+        if (ref.rack, ref.slot) != (self._address.rack, self._address.slot):
+            raise ConfigError(
+                f"{format_object(ref)} is not an object of the module in slot {self._address}"
+            )
+
+
+class ModuleDevice:
+    """The Device face of one module in one PLC slot."""
+
+    def __init__(self, module: IntelligentModule, plc: Plc) -> None:
+        self.module = module
+        self.plc = plc
+
+    # --- identity ---------------------------------------------------------
+
+    @property
+    def kind(self) -> str:
+        return self.module.type_name
+
+    @property
+    def family(self) -> Family:
+        return Family.MODULE
+
+    @property
+    def address(self) -> ModuleAddress:
+        return ModuleAddress(self.module.rack, self.module.slot)
+
+    # --- the face -----------------------------------------------------------
+
+    def status(self) -> DeviceStatus:
+        m = self.module
+        return DeviceStatus(
+            kind=self.kind,
+            address=str(self.address),
+            state=m.state.value,
+            mode=self.mode(),
+            leds=self.leds(),
+            ports=tuple(self.port_states()),
+            details=tuple(m.status().items()),
+        )
+
+    def mode(self) -> str | None:
+        """Run / Stop where the module has them; None where it has none."""
+        m = self.module
+        if not m.has_run_stop:
+            return None
+        if m.state is not ModuleState.OPERATIONAL:
+            return None
+        return "Run" if m.running else "Stop"
+
+    def leds(self) -> tuple[tuple[str, str], ...]:
+        # ADAPT(TSX base): `.leds` becomes a dict property {name: on/off/blink}
+        lights: Leds = self.module.leds()
+        return tuple((name, "on" if on else "off") for name, on in lights._asdict().items())
+
+    def port_states(self) -> list[PortState]:
+        return []
+
+    def inputs(self) -> Mapping[str, Input]:
+        return {}
+
+    def input(self, name: str) -> Input:
+        token = name.strip()
+        if not self.inputs() and token.isdigit():  # a core only the PLC knows
+            return Input(token, "as the module takes it", lambda v: self._console_input(token, v))
+        return pick_input(self, token)
+
+    def _console_input(self, channel: str, value: InputValue) -> None:
+        text = (
+            value
+            if isinstance(value, str)
+            else str(int(value) if isinstance(value, bool) else value)
+        )
+        self.module.console_input(int(channel), text)
+
+    def faults(self) -> Mapping[str, Fault]:
+        m = self.module
+        return {
+            name: Fault(name, text, partial(m.inject_fault, name))
+            for name, text in m.fault_names().items()
+        }
+
+    def fault(self, name: str) -> Fault:
+        return pick_fault(self, name)
+
+    def objects(self) -> PlcObjects:
+        return PlcObjects(self.plc, self.address)
+
+    def ports(self) -> list[Port]:
+        return []
+
+    # --- plant file -----------------------------------------------------------
+
+    def configure(self, table: Table, ctx: BuildContext, where: str) -> None:
+        """The kind's own keys (identity keys are gone); legacy cores read them themselves."""
+        self.module.configure_from_plant(dict(table), where, ctx.base_dir)
+
+    def bind(self, port: Port, runner: object) -> list[str]:
+        raise ConfigError(f"{self.kind} in slot {self.address} has no port {port.name!r}")
+
+
+def insert_module(table: Table, ctx: BuildContext, where: str) -> tuple[IntelligentModule, Plc]:
+    """Put the module a ``[[module]]`` table names into its slot (field-path errors)."""
+    plc = ctx.require_plc(where)
+    type_name = string(table, "type", where, '"TSX AEM 811"')
+    rack = integer(table, "rack", where, 0)
+    slot = integer(table, "slot", where)
+    code = optional_integer(table, "code", where)
+    try:
+        module: IntelligentModule = plc.insert(type_name, rack=rack, slot=slot, code=code)
+    except ConfigError as exc:
+        text = str(exc)
+        field_name = "type" if "module type" in text else "rack" if "rack" in text else "slot"
+        raise ConfigError(f"{where}.{field_name}: {exc}") from None
+    return module, plc
+
+
+def own_keys(table: Table) -> dict[str, object]:
+    """The table without the identity keys the plant builder read."""
+    identity = {key.name for key in IDENTITY}
+    return {k: v for k, v in table.items() if k not in identity}
+
+
+def build_generic(table: Table, ctx: BuildContext, where: str) -> ModuleDevice:
+    """A module class only the PLC's type table knows: its core reads its own keys."""
+    module, plc = insert_module(table, ctx, where)
+    device = ModuleDevice(module, plc)
+    try:
+        device.configure(own_keys(table), ctx, where)
+    except ConfigError as exc:
+        message = str(exc)
+        raise ConfigError(message if message.startswith(where) else f"{where}: {message}") from None
+    return device
+
+
+GENERIC_SCHEMA = Schema(IDENTITY, open=True)

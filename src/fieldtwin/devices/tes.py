@@ -1,0 +1,261 @@
+"""The Device face of the Leroy TES remote I/O terminals (docs/tes.md).
+
+Address: the endpoint and the slave number on it.  Inputs: ``"0"``..``"31"``
+digital (true/false, 1/0, on/off; a discrete signal), ``"a0"``..``"a7"``
+analog (volts or milliamps; an analog signal); on a TES with analog inputs
+only, ``"2"`` is ``"a2"`` (the console's older form).  Faults: ``power`` (24 V
+off), and on the TES 32ET-S ``short_I`` / ``open_I`` (wiring, §4.1.5).
+Objects: the words of the memory map by address or name, read as a master
+reads them (with side effects: memorized inputs restored) or peeked.
+Every TES-specific call of the face is in this file.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from functools import partial
+from pathlib import Path
+
+from fieldtwin.devices.common import apply_faults, apply_inputs
+from fieldtwin.devices.context import BuildContext
+from fieldtwin.devices.face import (
+    DeviceStatus,
+    Family,
+    Fault,
+    Input,
+    InputValue,
+    Port,
+    PortState,
+    SignalSpec,
+    TesAddress,
+    pick_fault,
+)
+from fieldtwin.devices.kind import Build, DeviceKind
+from fieldtwin.devices.schema import Key, Schema, Table
+from fieldtwin.errors import ConfigError
+from fieldtwin.modbus.model import Link
+from fieldtwin.signals import analog_from_spec, discrete_from_spec
+from fieldtwin.tes.model import Tes
+from fieldtwin.tes.models import MODELS
+from fieldtwin.tes.plant import KEYS, build_one, check_lines, link_of
+from fieldtwin.words import format_hex, parse_word
+
+GROUP = "modbus"  # TES on one endpoint share one line
+_TRUE = ("1", "1.0", "on", "true", "yes")
+_FALSE = ("0", "0.0", "off", "false", "no")
+
+
+class TesRegisters:
+    """The TES words by address (``H'003'``, ``0x003``, ``3``) or by their map name."""
+
+    def __init__(self, tes: Tes) -> None:
+        self._tes = tes
+
+    def names(self) -> list[str]:
+        return [f"{format_hex(a, 3)} {r.name}" for a, r in sorted(self._tes.registers.items())]
+
+    def address(self, name: str) -> int:
+        token = name.strip()
+        for address, reg in self._tes.registers.items():
+            if reg.name.lower() == token.lower():
+                return address
+        try:
+            return int(token, 0) if token.lower().startswith("0x") else parse_word(token)
+        except ConfigError:
+            raise ConfigError(f"{self._tes.model.name}: no word {name!r}") from None
+
+    def read(self, name: str) -> int:
+        return self._tes.read(self.address(name))  # ADAPT(TES): `tes.read` master read
+
+    def peek(self, name: str) -> int:
+        return self._tes.peek_word(self.address(name))  # ADAPT(TES): `tes.peek`
+
+    def write(self, name: str, value: int) -> None:
+        self._tes.write(self.address(name), value)
+
+
+class TesDevice:
+    """A TES on its endpoint, with the table it came from (for the line checks)."""
+
+    def __init__(self, tes: Tes, endpoint: str, link: Link, table: Table, where: str) -> None:
+        self.tes = tes
+        self.endpoint = endpoint
+        self.link = link
+        self.table = table
+        self.where = where
+
+    @property
+    def kind(self) -> str:
+        return self.tes.model.name
+
+    @property
+    def family(self) -> Family:
+        return Family.TES
+
+    @property
+    def address(self) -> TesAddress:
+        return TesAddress(self.endpoint, self.tes.slave)
+
+    def status(self) -> DeviceStatus:
+        tes = self.tes
+        details = (("status", format_hex(tes.status_word())),) if tes.powered else ()
+        return DeviceStatus(
+            kind=self.kind,
+            address=str(self.address),
+            state="on" if tes.powered else "off",
+            mode=None,
+            leds=tuple((name, _led(state)) for name, state in tes.leds.items()),
+            ports=(PortState(self.link.value, self.endpoint),),
+            details=details,
+        )
+
+    # --- inputs ---------------------------------------------------------------
+
+    def inputs(self) -> Mapping[str, Input]:
+        model = self.tes.model
+        found = {str(i): self._digital(i) for i in range(model.digital_inputs)}
+        found.update({f"a{k}": self._analog(k) for k in model.analog_inputs})
+        return found
+
+    def input(self, name: str) -> Input:
+        text = name.strip().lower()
+        model = self.tes.model
+        analog = text.startswith("a")
+        number = text[1:] if analog else text
+        if not number.isdigit():
+            raise ConfigError(f"not an input (allowed 0..31 digital, a0..a7 analog) of {self.kind}")
+        i = int(number)
+        if not analog and not model.digital_inputs and model.analog_inputs:
+            analog = True  # `tes 2 input 0 5.0` on an analog TES
+        if analog:
+            if i not in model.analog_inputs:
+                allowed = ", ".join(map(str, model.analog_inputs)) or "none"
+                raise ConfigError(f"{self.kind}: no analog input {i} (allowed: {allowed})")
+            return self._analog(i)
+        if not 0 <= i < model.digital_inputs:
+            top = f"0..{model.digital_inputs - 1}" if model.digital_inputs else "none"
+            raise ConfigError(f"{self.kind}: no digital input {i} (allowed {top})")
+        return self._digital(i)
+
+    def _digital(self, i: int) -> Input:
+        return Input(
+            str(i),
+            "digital: 1/0, on/off, true/false",
+            lambda v: self._contact(i, v),
+            lambda s, w, b: self._drive(i, s, w, b, True),
+        )
+
+    def _analog(self, k: int) -> Input:
+        unit = self.tes.model.analog_range.unit  # ADAPT(TES): the analog range
+        return Input(
+            f"a{k}",
+            f"analog, {unit}",
+            lambda v: self._level(k, v),
+            lambda s, w, b: self._drive(k, s, w, b, False),
+        )
+
+    def _contact(self, i: int, value: InputValue) -> None:
+        text = str(value).strip().lower()
+        if text not in _TRUE + _FALSE:
+            raise ConfigError(
+                f"{self.kind} input {i}: {value!r} not allowed (allowed 1/0, on/off, true/false)"
+            )
+        self.tes.set_input(i, text in _TRUE)
+
+    def _level(self, k: int, value: InputValue) -> None:
+        if isinstance(value, bool):
+            raise ConfigError(f"{self.kind} input a{k}: {value!r} is not a number")
+        try:
+            number = float(value)
+        except ValueError:
+            raise ConfigError(f"{self.kind} input a{k}: {value!r} is not a number") from None
+        self.tes.set_input(k, number)
+
+    def _drive(
+        self, i: int, spec: SignalSpec, where: str, base: Path | None, digital: bool
+    ) -> None:
+        if digital:
+            self.tes.set_signal(i, discrete_from_spec(spec, where=where, base_dir=base), True)
+        else:
+            self.tes.set_signal(i, analog_from_spec(spec, where=where, base_dir=base), False)
+
+    # --- faults -----------------------------------------------------------------
+
+    def faults(self) -> Mapping[str, Fault]:
+        # ADAPT(TES): the TES core's fault_names() / inject_fault(name, on) replace this
+        tes = self.tes
+        found = {"power": Fault("power", "24 V supply off", self._power)}
+        if tes.model.safety:
+            for i in range(tes.model.digital_inputs):
+                for wiring in ("short", "open"):
+                    found[f"{wiring}_{i}"] = Fault(
+                        f"{wiring}_{i}",
+                        f"input {i}: {'short circuit' if wiring == 'short' else 'broken wire'}",
+                        partial(self._wire, i, wiring),
+                    )
+        return found
+
+    def fault(self, name: str) -> Fault:
+        return pick_fault(self, name)
+
+    def _wire(self, i: int, wiring: str, on: bool) -> None:
+        self.tes.set_wiring(i, wiring if on else "ok")
+
+    def _power(self, off: bool) -> None:
+        if off and self.tes.powered:
+            self.tes.power_off()
+        elif not off and not self.tes.powered:
+            self.tes.power_on()
+
+    def objects(self) -> TesRegisters:
+        return TesRegisters(self.tes)
+
+    def ports(self) -> list[Port]:
+        return [Port(self.link.value, self.endpoint, GROUP)]
+
+    def label(self) -> str:
+        """``TES 1 TES 32EST``: the slave number, then the model (endpoint in status lines)."""
+        return f"TES {self.tes.slave} {self.kind}"
+
+
+def _led(state: str) -> str:
+    return "blink" if state.startswith("blink") else state
+
+
+SCHEMA = Schema(
+    (
+        Key("model", 'the TES model, e.g. "TES 32EST"'),
+        Key("slave", "the slave number on the port `link` names, 1..247"),
+        Key("endpoint", "tcp://HOST:PORT, rtu+tcp://HOST:PORT, pty, serial:///DEVICE"),
+        Key("link", "the TES port the endpoint is: rs485 or rs232"),
+    ),
+    tuple(
+        Key(k, "see docs/tes.md") for k in KEYS if k not in ("model", "slave", "endpoint", "link")
+    ),
+)
+
+
+def _builder() -> Build:
+    def build(table: Table, ctx: BuildContext, where: str) -> TesDevice:
+        tes = build_one(table, ctx.clock, where, ctx.base_dir, signals=False)
+        device = TesDevice(tes, str(table["endpoint"]), link_of(table, where), table, where)
+        inputs = table.get("inputs", {})
+        if not isinstance(inputs, Mapping):
+            raise ConfigError(f"{where}.inputs: not a table (e.g. {{ 0 = true, a2 = 4.5 }})")
+        apply_inputs(device, inputs, f"{where}.inputs", ctx.base_dir)
+        faults = table.get("faults")
+        if isinstance(faults, list):
+            apply_faults(device, faults, f"{where}.faults")
+        if not any(isinstance(d, TesDevice) for d in ctx.devices):
+            ctx.after_build(lambda: _check(ctx))
+        return device
+
+    return build
+
+
+def _check(ctx: BuildContext) -> None:
+    devices = [d for d in ctx.devices if isinstance(d, TesDevice)]
+    check_lines([d.tes for d in devices], [d.table for d in devices], ctx.name)
+
+
+KINDS = tuple(DeviceKind(name, Family.TES, SCHEMA, _builder()) for name in MODELS)

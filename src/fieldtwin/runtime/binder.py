@@ -1,0 +1,98 @@
+"""The one endpoint binder: every port of every device is opened here, after the plant is built.
+
+A device lists its ports (:meth:`fieldtwin.devices.face.Device.ports`); a port
+belongs to a group that says how it is opened:
+
+* ``modbus`` (a TES): every TES naming the same endpoint shares one line, served
+  by the Modbus server glue (fieldtwin.tes.serve: TCP, RTU over TCP, pty, serial);
+* ``scm`` (an SCM channel): the channel's own raw-character line, opened by the
+  SCM's endpoint functions (fieldtwin.tsx.scm.endpoints, through the module's
+  ``attach``), pumped by the PLC's runner.
+
+``fieldtwin run`` binds every group; ``load_plant`` (and so the console) binds
+the ``scm`` group only, leaving the TES's Modbus endpoints closed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Collection, Sequence
+
+from fieldtwin.devices.face import Device, Port
+from fieldtwin.devices.scm import GROUP as SERIAL_LINE
+from fieldtwin.devices.scm import ScmDevice
+from fieldtwin.devices.tes import GROUP as MODBUS
+from fieldtwin.devices.tes import TesDevice
+from fieldtwin.errors import ConfigError
+from fieldtwin.runtime.modbus_server import ModbusServer
+from fieldtwin.runtime.runner import Runner
+from fieldtwin.transports.url import parse_endpoint
+
+ALL = (MODBUS, SERIAL_LINE)
+
+
+class Binding:
+    """What one bind opened: its 'listening: ...' lines, and how to close it."""
+
+    def __init__(self) -> None:
+        self.lines: list[str] = []
+        self._closers: list[Callable[[], None]] = []
+
+    def add(self, lines: Sequence[str], closer: Callable[[], None]) -> None:
+        self.lines.extend(lines)
+        self._closers.append(closer)
+
+    def close(self) -> None:
+        closers, self._closers = self._closers, []
+        for close in reversed(closers):
+            close()
+
+
+def bind(
+    devices: Sequence[Device], runner: Runner | None, *, groups: Collection[str] = ALL
+) -> Binding:
+    """Open the ports of ``devices`` in ``groups`` (TES groups first, then SCM channels)."""
+    binding = Binding()
+    try:
+        if MODBUS in groups:
+            _serve_modbus(devices, runner, binding)
+        if SERIAL_LINE in groups:
+            _attach_channels(devices, binding)
+    except BaseException:
+        binding.close()
+        raise
+    return binding
+
+
+def _serve_modbus(devices: Sequence[Device], runner: Runner | None, binding: Binding) -> None:
+    from fieldtwin.tes.serve import serve_group
+
+    lines: dict[str, list[TesDevice]] = {}
+    for device in devices:
+        if isinstance(device, TesDevice):
+            for port in device.ports():
+                lines.setdefault(port.endpoint, []).append(device)
+    if lines and runner is None:
+        raise ConfigError("a TES endpoint needs the real-time runner (fieldtwin run)")
+    for url, members in lines.items():
+        assert runner is not None
+        # the plant builder checked that every TES on one endpoint names the same port
+        server: ModbusServer = serve_group(
+            runner, parse_endpoint(url), [d.tes for d in members], members[0].link
+        )
+        binding.add([server.describe()], server.close)
+
+
+def _attach_channels(devices: Sequence[Device], binding: Binding) -> None:
+    for device in devices:
+        if not isinstance(device, ScmDevice):
+            continue
+        for port in device.ports():
+            binding.add(device.bind(port, None), _detacher(device, port))
+
+
+def _detacher(device: ScmDevice, port: Port) -> Callable[[], None]:
+    channel = int(port.name.split()[-1])
+    return lambda: device.scm.detach(channel)
+
+
+__all__ = ["ALL", "MODBUS", "SERIAL_LINE", "Binding", "bind"]
