@@ -47,7 +47,8 @@ HELP = {
     " (input 5 0 2.5V, input 4 3 1, input 7 0.CTS 0)",
     "signal": "signal MODULE NAME KIND key=value...\n"
     "                           e.g. signal 5 0 sine offset=5 amplitude=2 period_s=60",
-    "fault": "fault MODULE NAME on|off  inject or clear a fault; 'faults MODULE' lists the names",
+    "fault": "fault MODULE NAME on|off [key=value...]  inject or clear a fault;"
+    " 'faults MODULE' lists the names",
     "faults": "faults MODULE             the faults a module can be given",
     "leds": "leds MODULE               the front-panel LEDs: OK=on ERR=off F=off",
     "power": "power break SECONDS       cut the PLC supply",
@@ -276,8 +277,10 @@ class Console:
         return set_signal(self._module(args[0]), f"signal {args[0]}", args[1:])
 
     def _fault(self, args: list[str]) -> list[str]:
-        if len(args) != 3:
-            raise ConfigError("fault: takes MODULE NAME on|off, e.g. fault 5 terminal_block on")
+        if len(args) < 3:
+            raise ConfigError(
+                "fault: takes MODULE NAME on|off [key=value...], e.g. fault 5 terminal_block on"
+            )
         return set_fault(self._module(args[0]), f"fault {args[0]}", args[1:])
 
     def _faults(self, args: list[str]) -> list[str]:
@@ -375,7 +378,7 @@ class Console:
         "write": (2, 2, lambda c, d, h, r: c._tes_write(d, h, r)),
         "input": (2, 2, lambda c, d, h, r: set_input(d, f"{h} input", r)),
         "signal": (2, 64, lambda c, d, h, r: set_signal(d, f"{h} signal", r)),
-        "fault": (2, 2, lambda c, d, h, r: set_fault(d, f"{h} fault", r)),
+        "fault": (2, 9, lambda c, d, h, r: set_fault(d, f"{h} fault", r)),
         "faults": (0, 0, lambda c, d, h, r: list_faults(d)),
         "status": (0, 0, lambda c, d, h, r: [tes_line(d)]),
         "leds": (0, 0, lambda c, d, h, r: [d.status().leds_text()]),
@@ -412,11 +415,20 @@ def set_signal(device: Device, head: str, args: list[str]) -> list[str]:
 
 
 def set_fault(device: Device, head: str, args: list[str]) -> list[str]:
-    name, state = args[0], args[1].lower()
+    """``NAME on|off [key=value...]``: a TES's ``late_answer on ms=200`` takes parameters."""
+    name, state, *pairs = args
+    state = state.lower()
     if state not in ("on", "off"):
         raise ConfigError(f"fault: {args[1]!r} not allowed (allowed: on, off)")
-    device.fault(name).set(state == "on")
-    return [f"{head} {name} {state}"]
+    params: dict[str, int | float] = {}
+    for pair in pairs:
+        key, sep, text = pair.partition("=")
+        value = value_of(text)
+        if not sep or isinstance(value, bool) or not isinstance(value, int | float):
+            raise ConfigError(f"fault {name}: {pair!r} is not key=NUMBER (e.g. ms=200)")
+        params[key] = value
+    device.fault(name).set(state == "on", **params)
+    return [f"{head} {name} {state}" + "".join(f" {pair}" for pair in pairs)]
 
 
 def list_faults(device: Device) -> list[str]:

@@ -64,9 +64,9 @@ def test_every_device_shows_the_same_face() -> None:
         tes.input("a0").set(5.0)
         plant.plc.advance(1.0)
         assert tes.objects().peek("H'003'") == 512  # 5 V, as tes/model.py's example
-        tes.fault("power").set()
+        tes.fault("power_off").set()
         assert tes.status().state == "off"
-        tes.fault("power").clear()
+        tes.fault("power_off").clear()
         assert tes.status().state == "on"
         with pytest.raises(ConfigError, match=r"TSX AEM 811 5: no input 'x' \(allowed: 0..7\)"):
             aem.input("x")

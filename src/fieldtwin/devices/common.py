@@ -1,7 +1,7 @@
 """The keys every device kind reads the same way: ``inputs`` (a table) and ``faults`` (a list).
 
     inputs = { "0" = true, "3" = 24.0, a2 = 4.5, "1" = { kind = "pulse", period_s = 2 } }
-    faults = ["terminal_block"]
+    faults = ["terminal_block"]          # or, with parameters: [{ name = "late_answer", ms = 200 }]
 
 An input is named as in the console (docs/architecture.md); a value is set as
 the input takes it, a table is a signal (docs/signals.md).  Kinds whose older
@@ -39,8 +39,23 @@ def apply_inputs(device: Device, spec: Mapping[str, object], where: str, base_di
 def apply_faults(device: Device, names: object, where: str) -> None:
     if not isinstance(names, list):
         raise ConfigError(f"{where}: {names!r} is not a list of fault names")
-    for name in names:
+    for index, entry in enumerate(names):
         try:
-            device.fault(str(name)).set(True)
+            if isinstance(entry, Mapping):  # { name = "late_answer", ms = 200 }
+                params = dict(entry)
+                name = params.pop("name", None)
+                if not isinstance(name, str):
+                    raise ConfigError(f"[{index}].name: missing or not a fault name")
+                numbers = {k: v for k, v in params.items() if _is_number(v)}
+                if len(numbers) != len(params):
+                    bad = sorted(str(k) for k in set(params) - set(numbers))
+                    raise ConfigError(f"[{index}]: {', '.join(bad)} must be numbers")
+                device.fault(name).set(True, **{str(k): v for k, v in numbers.items()})
+            else:
+                device.fault(str(entry)).set(True)
         except ConfigError as exc:
             raise ConfigError(f"{where}: {exc}") from None
+
+
+def _is_number(value: object) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)

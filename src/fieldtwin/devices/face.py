@@ -106,15 +106,31 @@ class Input:
         self.driver(spec, where, base_dir)
 
 
+FaultParam = int | float
+
+
 @dataclass(frozen=True, slots=True)
 class Fault:
-    """A named fault: described, set and cleared."""
+    """A named fault: described, set (with its parameters, if it takes any) and cleared.
+
+    ``params`` names what ``set`` takes (a TES's ``late_answer`` takes ``ms``);
+    ``configure`` receives them.  A fault without parameters has only ``setter``.
+    """
 
     name: str
     description: str
     setter: Callable[[bool], None]
+    params: tuple[str, ...] = ()
+    configure: Callable[[bool, Mapping[str, FaultParam]], None] | None = None
 
-    def set(self, active: bool = True) -> None:
+    def set(self, active: bool = True, **params: FaultParam) -> None:
+        if self.configure is not None:
+            self.configure(active, params)
+            return
+        if params:
+            raise ConfigError(
+                f"fault {self.name!r} takes no parameters, not {', '.join(sorted(params))}"
+            )
         self.setter(active)
 
     def clear(self) -> None:

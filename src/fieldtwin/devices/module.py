@@ -28,7 +28,7 @@ from fieldtwin.devices.face import (
 from fieldtwin.devices.schema import Key, Schema, Table, integer, optional_integer, string
 from fieldtwin.errors import ConfigError
 from fieldtwin.tsx.addressing import format_object, parse_object
-from fieldtwin.tsx.bus import Leds, ModuleState
+from fieldtwin.tsx.bus import ModuleState
 from fieldtwin.tsx.module import IntelligentModule
 from fieldtwin.tsx.plc import Plc
 
@@ -116,9 +116,8 @@ class ModuleDevice:
         return "Run" if m.running else "Stop"
 
     def leds(self) -> tuple[tuple[str, str], ...]:
-        # ADAPT(TSX base): `.leds` becomes a dict property {name: on/off/blink}
-        lights: Leds = self.module.leds()
-        return tuple((name, "on" if on else "off") for name, on in lights._asdict().items())
+        """The module's front-panel LEDs: (name, "on" | "off" | "blink")."""
+        return tuple(self.module.leds.items())
 
     def port_states(self) -> list[PortState]:
         return []

@@ -3,8 +3,10 @@
 Address: the endpoint and the slave number on it.  Inputs: ``"0"``..``"31"``
 digital (true/false, 1/0, on/off; a discrete signal), ``"a0"``..``"a7"``
 analog (volts or milliamps; an analog signal); on a TES with analog inputs
-only, ``"2"`` is ``"a2"`` (the console's older form).  Faults: ``power`` (24 V
-off), and on the TES 32ET-S ``short_I`` / ``open_I`` (wiring, §4.1.5).
+only, ``"2"`` is ``"a2"`` (the console's older form).  Faults: the TES core's
+catalogue (``fieldtwin.tes.faults``): ``power_off`` (24 V off), the line faults
+``no_answer``, ``late_answer`` (ms), ``bad_crc``, ``broken_character``,
+``not_ready``, and on the TES 32ET-S ``short_I`` / ``open_I`` (wiring, §4.1.5).
 Objects: the words of the memory map by address or name, read as a master
 reads them (with side effects: memorized inputs restored) or peeked.
 Every TES-specific call of the face is in this file.
@@ -22,6 +24,7 @@ from fieldtwin.devices.face import (
     DeviceStatus,
     Family,
     Fault,
+    FaultParam,
     Input,
     InputValue,
     Port,
@@ -35,6 +38,8 @@ from fieldtwin.devices.schema import Key, Schema, Table
 from fieldtwin.errors import ConfigError
 from fieldtwin.modbus.model import Link
 from fieldtwin.signals import analog_from_spec, discrete_from_spec
+from fieldtwin.tes.faults import fault_catalogue
+from fieldtwin.tes.memmap import register_names, register_table
 from fieldtwin.tes.model import Tes
 from fieldtwin.tes.models import MODELS
 from fieldtwin.tes.plant import KEYS, build_one, check_lines, link_of
@@ -52,23 +57,24 @@ class TesRegisters:
         self._tes = tes
 
     def names(self) -> list[str]:
-        return [f"{format_hex(a, 3)} {r.name}" for a, r in sorted(self._tes.registers.items())]
+        table = register_table(self._tes.model)
+        return [f"{format_hex(a, 3)} {r.name}" for a, r in sorted(table.items())]
 
     def address(self, name: str) -> int:
         token = name.strip()
-        for address, reg in self._tes.registers.items():
+        for reg in register_names(self._tes.model).values():
             if reg.name.lower() == token.lower():
-                return address
+                return reg.address
         try:
             return int(token, 0) if token.lower().startswith("0x") else parse_word(token)
         except ConfigError:
             raise ConfigError(f"{self._tes.model.name}: no word {name!r}") from None
 
     def read(self, name: str) -> int:
-        return self._tes.read(self.address(name))  # ADAPT(TES): `tes.read` master read
+        return self._tes.read(self.address(name))
 
     def peek(self, name: str) -> int:
-        return self._tes.peek_word(self.address(name))  # ADAPT(TES): `tes.peek`
+        return self._tes.peek(self.address(name))
 
     def write(self, name: str, value: int) -> None:
         self._tes.write(self.address(name), value)
@@ -104,7 +110,7 @@ class TesDevice:
             address=str(self.address),
             state="on" if tes.powered else "off",
             mode=None,
-            leds=tuple((name, _led(state)) for name, state in tes.leds.items()),
+            leds=tuple(tes.leds.items()),
             ports=(PortState(self.link.value, self.endpoint),),
             details=details,
         )
@@ -146,7 +152,7 @@ class TesDevice:
         )
 
     def _analog(self, k: int) -> Input:
-        unit = self.tes.model.analog_range.unit  # ADAPT(TES): the analog range
+        unit = self.tes.model.analog_range.unit
         return Input(
             f"a{k}",
             f"analog, {unit}",
@@ -182,30 +188,27 @@ class TesDevice:
     # --- faults -----------------------------------------------------------------
 
     def faults(self) -> Mapping[str, Fault]:
-        # ADAPT(TES): the TES core's fault_names() / inject_fault(name, on) replace this
+        """The TES core's fault catalogue for this model (docs/tes.md, "Faults")."""
         tes = self.tes
-        found = {"power": Fault("power", "24 V supply off", self._power)}
-        if tes.model.safety:
-            for i in range(tes.model.digital_inputs):
-                for wiring in ("short", "open"):
-                    found[f"{wiring}_{i}"] = Fault(
-                        f"{wiring}_{i}",
-                        f"input {i}: {'short circuit' if wiring == 'short' else 'broken wire'}",
-                        partial(self._wire, i, wiring),
-                    )
-        return found
+        return {
+            spec.name: Fault(
+                spec.name,
+                spec.description,
+                partial(self._inject, spec.name),
+                spec.params,
+                partial(self._inject_with, spec.name) if spec.params else None,
+            )
+            for spec in fault_catalogue(tes.model).values()
+        }
 
     def fault(self, name: str) -> Fault:
         return pick_fault(self, name)
 
-    def _wire(self, i: int, wiring: str, on: bool) -> None:
-        self.tes.set_wiring(i, wiring if on else "ok")
+    def _inject(self, name: str, on: bool) -> None:
+        self.tes.inject_fault(name, on)
 
-    def _power(self, off: bool) -> None:
-        if off and self.tes.powered:
-            self.tes.power_off()
-        elif not off and not self.tes.powered:
-            self.tes.power_on()
+    def _inject_with(self, name: str, on: bool, params: Mapping[str, FaultParam]) -> None:
+        self.tes.inject_fault(name, on, **params)
 
     def objects(self) -> TesRegisters:
         return TesRegisters(self.tes)
@@ -216,10 +219,6 @@ class TesDevice:
     def label(self) -> str:
         """``TES 1 TES 32EST``: the slave number, then the model (endpoint in status lines)."""
         return f"TES {self.tes.slave} {self.kind}"
-
-
-def _led(state: str) -> str:
-    return "blink" if state.startswith("blink") else state
 
 
 SCHEMA = Schema(
