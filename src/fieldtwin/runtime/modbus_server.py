@@ -16,6 +16,7 @@ from fieldtwin.clock import MS, Handle
 from fieldtwin.errors import TransportError
 from fieldtwin.modbus.line import RtuLine, Wiring
 from fieldtwin.modbus.model import Link, SlaveDevice
+from fieldtwin.modbus.rtu import MAX_FRAME
 from fieldtwin.modbus.session import TcpSession
 from fieldtwin.modbus.slave import SlaveSet, Transmission
 from fieldtwin.modbus.timing import RtuTiming
@@ -90,8 +91,20 @@ class _Pump:
         self._timer = None if deadline is None else self.runner.clock.schedule(deadline, self._wake)
 
 
+def url_of(scheme: str, listener: Listener) -> str:
+    """The endpoint URL a listener is bound to, one that parses back (``tcp://[::]:502``)."""
+    host, port = listener.address[:2]
+    return f"{scheme}://[{host}]:{port}" if ":" in host else f"{scheme}://{host}:{port}"
+
+
 def _slaves_text(slaves: SlaveSet) -> str:
     return ",".join(str(n) for n in slaves.numbers)
+
+
+def _max_lead(timing: RtuTiming) -> int:
+    """A real line carries at most one longest frame beyond what the wall has seen
+    (issue 10 item 5): more is a UART overrun (see modbus/rtu.py)."""
+    return MAX_FRAME * timing.char_us
 
 
 def _scaled(runner: Runner, floor_us: int) -> int:
@@ -147,8 +160,7 @@ def serve_tcp(
 ) -> ModbusServer:
     """Modbus TCP on ``listener``: one session per connection, units = slave numbers."""
     slaves = SlaveSet(devices, link)
-    host, port = listener.address
-    server = ModbusServer(runner, "modbus-tcp", f"tcp://{host}:{port}", slaves, listener=listener)
+    server = ModbusServer(runner, "modbus-tcp", url_of("tcp", listener), slaves, listener=listener)
 
     def on_connect(transport: Transport, now: int) -> None:
         server.pumps.append(_Pump(runner, transport, TcpSession(slaves)))
@@ -168,7 +180,8 @@ def serve_rtu(
     """A Modbus RTU line on ``transport`` (pty, serial port or memory)."""
     timing = RtuTiming.from_format(settings)
     if transport.is_real:
-        timing = timing.relaxed(_scaled(runner, REAL_LINE_FLOOR_US), eager=True)
+        floor = _scaled(runner, REAL_LINE_FLOOR_US)
+        timing = timing.relaxed(floor, eager=True, max_lead_us=_max_lead(timing))
     line = RtuLine(devices, link, timing, wiring)
     where = f"pty {transport.peer_path}" if transport.peer_path else transport.name
     server = ModbusServer(runner, "modbus-rtu", where, line.slaves, str(settings))
@@ -187,11 +200,10 @@ def serve_rtu_over_tcp(
     """RTU frames inside TCP connections (a serial-to-Ethernet gateway in front of a line)."""
     devices = tuple(devices)
     slaves = SlaveSet(devices, link)
-    timing = RtuTiming.from_format(settings).relaxed(
-        _scaled(runner, TCP_STREAM_FLOOR_US), eager=True
-    )
-    host, port = listener.address
-    where = f"rtu+tcp://{host}:{port}"
+    timing = RtuTiming.from_format(settings)
+    floor = _scaled(runner, TCP_STREAM_FLOOR_US)
+    timing = timing.relaxed(floor, eager=True, max_lead_us=_max_lead(timing))
+    where = url_of("rtu+tcp", listener)
     server = ModbusServer(runner, "modbus-rtu-over-tcp", where, slaves, str(settings), listener)
 
     def on_connect(transport: Transport, now: int) -> None:

@@ -140,7 +140,7 @@ class Port:
 def open_real(url: str, line: Line, runner: Any) -> Port:
     """Open a pty, serial device or TCP listener for ``line`` and attach it to ``runner``."""
     from fieldtwin.transports import listen, open_pty, open_serial, parse_endpoint
-    from fieldtwin.transports.base import LineSettings
+    from fieldtwin.transports.base import line_settings
 
     endpoint = parse_endpoint(url)
     # parse_endpoint gives a serial URL default settings: only a query fixes them
@@ -148,7 +148,7 @@ def open_real(url: str, line: Line, runner: Any) -> Port:
     port = Port(url, line, runner=runner, settings_given=given)
     fmt = line.fmt
     settings = endpoint.settings if given else None
-    settings = settings or LineSettings(line.baud, fmt.data_bits, fmt.parity.letter, fmt.stop_bits)
+    settings = settings or line_settings(line.baud, fmt.data_bits, fmt.parity.letter, fmt.stop_bits)
     if endpoint.scheme == "pty":
         port.peer = open_pty(settings)
         port.path = port.peer.peer_path
