@@ -108,6 +108,7 @@ def _module_endpoints(plant: Any) -> list[str]:
 def _run(args: argparse.Namespace) -> int:
     from fieldtwin.live import plain_status, render
     from fieldtwin.plant import build_plant, plant_speed, read_plant
+    from fieldtwin.runtime.exposure import warnings_for
     from fieldtwin.runtime.runner import Runner
 
     plant_file = read_plant(args.plant)
@@ -118,6 +119,8 @@ def _run(args: argparse.Namespace) -> int:
     endpoints = plant.start_endpoints(runner) + _module_endpoints(plant)
     for line in endpoints:
         print(line, flush=True)
+    for warning in warnings_for(endpoints):  # issue 10 item 7
+        print(warning, file=sys.stderr, flush=True)
     print(
         f"running {plant.title} at {'max speed' if speed is None else f'x{speed:g}'}",
         flush=True,

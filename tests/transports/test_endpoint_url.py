@@ -130,3 +130,9 @@ def test_open_endpoint_opens_the_twins_side() -> None:
 def test_a_memory_endpoint_cannot_be_opened_alone() -> None:
     with pytest.raises(ConfigError, match="memory_pair"):
         open_endpoint(parse_endpoint("memory"))
+
+
+@pytest.mark.parametrize("url", ["pty?baud=²", "pty?baud=١٢", "serial:///dev/ttyS0?stop=³"])
+def test_unicode_digits_are_a_config_error_not_a_traceback(url: str) -> None:
+    with pytest.raises(ConfigError, match=r"is not a whole number"):
+        parse_endpoint(url)

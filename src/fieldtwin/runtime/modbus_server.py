@@ -22,6 +22,7 @@ from fieldtwin.modbus.slave import SlaveSet, Transmission
 from fieldtwin.modbus.timing import RtuTiming
 from fieldtwin.runtime.runner import Runner
 from fieldtwin.transports.base import LineSettings, Listener, Transport
+from fieldtwin.transports.tcp import listener_url
 
 # Real transports deliver bytes with operating-system jitter and no line timing:
 # a frame complete by length and CRC is taken at once (eager), and inside a
@@ -93,8 +94,7 @@ class _Pump:
 
 def url_of(scheme: str, listener: Listener) -> str:
     """The endpoint URL a listener is bound to, one that parses back (``tcp://[::]:502``)."""
-    host, port = listener.address[:2]
-    return f"{scheme}://[{host}]:{port}" if ":" in host else f"{scheme}://{host}:{port}"
+    return listener_url(scheme, listener.address)
 
 
 def _slaves_text(slaves: SlaveSet) -> str:

@@ -40,6 +40,12 @@ def _hostport(address: tuple[str, int] | tuple[str, int, int, int]) -> str:
     return f"[{host}]:{port}" if ":" in host else f"{host}:{port}"
 
 
+def listener_url(scheme: str, address: tuple[str, int] | tuple[str, int, int, int]) -> str:
+    """``scheme://HOST:PORT`` for a bound address, IPv6 in brackets so that it parses
+    back (``tcp://[::]:25951``, not ``tcp://:::25951``)."""
+    return f"{scheme}://{_hostport(address)}"
+
+
 class TcpTransport(FdTransport):
     """One TCP connection."""
 
@@ -106,7 +112,7 @@ class TcpListener:
             raise TransportError(f"cannot listen on tcp://{host}:{port}: {exc}") from exc
         bound = sock.getsockname()
         self.address: tuple[str, int] = (str(bound[0]), int(bound[1]))
-        self.name = f"tcp://{_hostport(self.address)}"
+        self.name = listener_url("tcp", self.address)
         self.closed = False
         self.max_connections = max_connections
         self.live = 0  # accepted connections still open
