@@ -27,8 +27,11 @@ port=$(sed -n 's|^listening: modbus-tcp tcp://127.0.0.1:\([0-9]*\) .*|\1|p' "$ou
 pty=$(sed -n 's|^listening: modbus-rtu pty \(/dev/pts/[0-9]*\) .*|\1|p' "$out/fieldtwin.log")
 echo "fieldtwin pid $pid: tcp port $port, rtu pty $pty"
 
-# The TES 32EST map (TES 6.2): every table answers from word/bit 0 to 16 (map size 16).
-common="--unit 1 --addr 0 --map-size 16 --server-pid $pid"
+# The TES 32EST map (TES 6.2): words 000h..1A4h (421 words) answer; bits are addressed
+# word x 10h + bit (TES 7.1.2), so the bit tables reach 16 x further (see docs/modbus.md).
+# Writes go to 012h (OR mask of output word 0, RW in RAM): word 000h is the status word,
+# whose bits the master can only reset (TES 6.2.1).
+common="--unit 1 --addr 0 --map-size 421 --write-addr 18 --server-pid $pid"
 "$python" "$harness" tcp --port "$port" $common --json "$out/tcp.json" "$@"
 tcp=$?
 "$python" "$harness" rtu --device "$pty" --baud 38400 $common --json "$out/rtu.json" "$@"

@@ -45,6 +45,15 @@ def test_a_frame_longer_than_256_bytes_is_one_crc_error_and_is_never_held() -> N
     assert frames(f.receive(READ, FAR) + f.poll(2 * FAR)) == [READ]
 
 
+def test_a_263_byte_frame_with_a_valid_crc_is_not_a_frame() -> None:
+    # fc16, 127 words, byte count 254: its own length says 263 bytes, past MAX_FRAME
+    body = b"\x01\x10\x00\x00\x00\x7f\xfe" + bytes(254)
+    for timing in (SIM, REAL):
+        f = RtuFramer(timing, request_length)
+        events = f.receive(with_crc(body), 10**9) + f.poll(FAR)
+        assert frames(events) == [] and faults(events) == {Counter.CRC_ERRORS: 1}
+
+
 def test_back_to_back_frames_past_256_bytes_are_never_dropped() -> None:
     write = with_crc(b"\x02" + encode_request(WriteWords(0, tuple(range(100)))))  # 209 bytes
     stream = write + READ + write + READ

@@ -93,7 +93,7 @@ def split_frames(buf: bytes, length_of: LengthOf) -> tuple[list[bytes], bytes]:
     frames: list[bytes] = []
     while buf:
         n = length_of(buf[:HEADER])
-        if n is not None and MIN_FRAME <= n < len(buf) and crc_ok(buf[:n]):
+        if n is not None and MIN_FRAME <= n <= MAX_FRAME and n < len(buf) and crc_ok(buf[:n]):
             frames.append(buf[:n])
             buf = buf[n:]
         elif MIN_FRAME <= len(buf) <= MAX_FRAME and crc_ok(buf):
@@ -227,8 +227,10 @@ class RtuFramer:
         try:
             while True:
                 n = self._length_of(bytes(view[offset : offset + HEADER]))
-                end = offset + n if n is not None else 0
-                if n is None or n < MIN_FRAME or end > size or not crc_ok(view[offset:end]):
+                if n is None or not MIN_FRAME <= n <= MAX_FRAME:
+                    break  # not a frame, or longer than any RTU frame may be
+                end = offset + n
+                if end > size or not crc_ok(view[offset:end]):
                     break
                 at = last_end - (size - end) * self.timing.char_us
                 self._events.append(Frame(bytes(view[offset:end]), at))

@@ -140,8 +140,13 @@ class TcpListener:
                 self.refused += 1
                 _close_at_once(conn)
                 continue
+            try:
+                transport = TcpTransport(conn, f"{self.name} <- {_hostport(remote)}", self._released)
+            except OSError:  # reset before we could set it up: take the next
+                conn.close()
+                continue
             self.live += 1
-            return TcpTransport(conn, f"{self.name} <- {_hostport(remote)}", self._released)
+            return transport
         return None  # still readable: the next wait comes back here
 
     def _released(self) -> None:
