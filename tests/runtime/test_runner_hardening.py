@@ -14,7 +14,7 @@ from fieldtwin.clock import MS, SimClock
 from fieldtwin.runtime.runner import ACCEPT_BACKOFF_S, OUTPUT_BOUND, Runner
 from fieldtwin.runtime.wall import SystemWall
 from fieldtwin.transports.base import AcceptFailed, Transport
-from fieldtwin.transports.tcp import connect, listen
+from fieldtwin.transports.tcp import TCP_READ_CHUNK, connect, listen
 from tests.runtime.fake_wall import FakeLine, FakeListener, FakeWall
 
 DEADLINE_S = 20.0
@@ -142,7 +142,7 @@ def test_a_peer_that_never_reads_stops_being_read_and_others_are_served() -> Non
             runner.advance(1 * MS)
         assert time.monotonic() < deadline
         queued = max(getattr(t, "pending_output", 0) for t in conns)
-        assert queued <= OUTPUT_BOUND + 8 * 8192  # the bound plus one read's answers
+        assert queued <= OUTPUT_BOUND + 8 * TCP_READ_CHUNK  # the bound plus one read's answers
         got = bytearray()
         fast.send(b"ping")
         runner.run_until(lambda: bool(got.extend(fast.receive()) or len(got) >= 32), 2000 * MS)
