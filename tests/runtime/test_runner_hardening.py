@@ -196,7 +196,7 @@ SERVER = textwrap.dedent(
 
 def test_running_out_of_descriptors_never_ends_the_server() -> None:
     proc = subprocess.Popen(
-        [sys.executable, "-c", SERVER, "8"],
+        [sys.executable, "-c", SERVER, "4"],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
