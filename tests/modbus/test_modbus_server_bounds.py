@@ -1,8 +1,9 @@
-"""Issue 10 item 5 end to end: a garbage burst on a pty line never leaves it deaf."""
+"""Issue 10 end to end: a garbage burst never leaves a pty line deaf; churn never grows a server."""
 
 from __future__ import annotations
 
 import contextlib
+import socket
 import time
 
 import serial
@@ -13,10 +14,11 @@ from fieldtwin.modbus.model import Counter, Link, ReadWords
 from fieldtwin.modbus.pdu import encode_request
 from fieldtwin.modbus.rtu import MAX_FRAME
 from fieldtwin.modbus.timing import RtuTiming
-from fieldtwin.runtime.modbus_server import serve_rtu
+from fieldtwin.runtime.modbus_server import serve_rtu, serve_tcp
 from fieldtwin.runtime.runner import Runner
 from fieldtwin.transports.base import line_settings
 from fieldtwin.transports.pty import open_pty
+from fieldtwin.transports.tcp import listen
 from tests.modbus.modbus_fakes import TableDevice
 
 DEADLINE_S = 20.0
@@ -56,4 +58,21 @@ def test_a_burst_at_pty_speed_is_an_overrun_and_the_line_answers_soon_after() ->
         assert time.monotonic() - started < 1.0
     finally:
         port.close()
+        server.close()
+
+
+def test_connect_close_churn_never_grows_the_server() -> None:
+    runner = Runner(SimClock(), speed=None)
+    listener = listen("127.0.0.1", 0)
+    server = serve_tcp(runner, listener, [TableDevice(1)])
+    host, port = listener.address
+    try:
+        for _ in range(5):
+            clients = [socket.create_connection((host, port), timeout=5) for _ in range(40)]
+            assert runner.run_until(lambda: len(server.pumps) == 40, 2000 * MS)
+            for client in clients:
+                client.close()
+            assert runner.run_until(lambda: not server.pumps, 2000 * MS)
+        assert listener.live == 0 and runner.watched == 1  # only the listener is left
+    finally:
         server.close()

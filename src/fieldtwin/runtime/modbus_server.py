@@ -44,11 +44,20 @@ class Core(Protocol):
 class _Pump:
     """One core bound to one transport on the runner's clock."""
 
-    def __init__(self, runner: Runner, transport: Transport, core: Core) -> None:
+    def __init__(
+        self,
+        runner: Runner,
+        transport: Transport,
+        core: Core,
+        served: dict[int, _Pump] | None = None,
+    ) -> None:
         self.runner = runner
         self.transport = transport
         self.core = core
         self._timer: Handle | None = None
+        self._served = served  # the server's open pumps: this one leaves it on close
+        if served is not None:
+            served[id(self)] = self
         runner.attach(transport, self.on_data, self.on_close)
 
     def on_data(self, data: bytes, now: int) -> None:
@@ -59,6 +68,8 @@ class _Pump:
         self.close()
 
     def close(self) -> None:
+        if self._served is not None:
+            self._served.pop(id(self), None)
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
@@ -130,7 +141,8 @@ class ModbusServer:
         self.slaves = slaves
         self._line = line
         self._listener = listener
-        self.pumps: list[_Pump] = []
+        # open transports served, by id: a pump leaves on close, so churn never grows it
+        self.pumps: dict[int, _Pump] = {}
         self.closed = False
 
     def describe(self) -> str:
@@ -141,8 +153,7 @@ class ModbusServer:
     @property
     def connections(self) -> int:
         """Open transports served (TCP connections, or the one RTU line)."""
-        self.pumps = [p for p in self.pumps if not p.transport.closed]
-        return len(self.pumps)
+        return sum(not pump.transport.closed for pump in self.pumps.values())
 
     def close(self) -> None:
         """Stop listening and close every transport this server serves."""
@@ -150,7 +161,7 @@ class ModbusServer:
         if self._listener is not None:
             self.runner.detach(self._listener)
             self._listener.close()
-        for pump in self.pumps:
+        for pump in list(self.pumps.values()):
             pump.close()
         self.pumps.clear()
 
@@ -163,7 +174,7 @@ def serve_tcp(
     server = ModbusServer(runner, "modbus-tcp", url_of("tcp", listener), slaves, listener=listener)
 
     def on_connect(transport: Transport, now: int) -> None:
-        server.pumps.append(_Pump(runner, transport, TcpSession(slaves)))
+        _Pump(runner, transport, TcpSession(slaves), server.pumps)
 
     runner.attach_listener(listener, on_connect)
     return server
@@ -185,7 +196,7 @@ def serve_rtu(
     line = RtuLine(devices, link, timing, wiring)
     where = f"pty {transport.peer_path}" if transport.peer_path else transport.name
     server = ModbusServer(runner, "modbus-rtu", where, line.slaves, str(settings))
-    server.pumps.append(_Pump(runner, transport, line))
+    _Pump(runner, transport, line, server.pumps)
     return server
 
 
@@ -207,7 +218,7 @@ def serve_rtu_over_tcp(
     server = ModbusServer(runner, "modbus-rtu-over-tcp", where, slaves, str(settings), listener)
 
     def on_connect(transport: Transport, now: int) -> None:
-        server.pumps.append(_Pump(runner, transport, RtuLine(devices, link, timing, wiring)))
+        _Pump(runner, transport, RtuLine(devices, link, timing, wiring), server.pumps)
 
     runner.attach_listener(listener, on_connect)
     return server
