@@ -104,6 +104,7 @@ def _run(args: argparse.Namespace) -> int:
     from fieldtwin.live import plain_status, render
     from fieldtwin.plant import build_plant, plant_speed, read_plant
     from fieldtwin.runtime.binder import bind
+    from fieldtwin.runtime.exposure import warnings_for
     from fieldtwin.runtime.runner import Runner
 
     plant_file = read_plant(args.plant)
@@ -120,6 +121,8 @@ def _run(args: argparse.Namespace) -> int:
     endpoints = binding.lines
     for line in endpoints:
         print(line, flush=True)
+    for warning in warnings_for(endpoints):  # issue 10 item 7
+        print(warning, file=sys.stderr, flush=True)
     print(
         f"running {plant.title} at {'max speed' if speed is None else f'x{speed:g}'}",
         flush=True,

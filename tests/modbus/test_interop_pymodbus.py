@@ -19,7 +19,7 @@ from fieldtwin.clock import SimClock
 from fieldtwin.modbus.model import Counter, Link
 from fieldtwin.runtime.modbus_server import serve_rtu, serve_rtu_over_tcp, serve_tcp
 from fieldtwin.runtime.runner import Runner
-from fieldtwin.transports.base import LineSettings
+from fieldtwin.transports.base import line_settings
 from fieldtwin.transports.pty import open_pty
 from fieldtwin.transports.tcp import listen
 from tests.modbus.modbus_fakes import TableDevice
@@ -51,13 +51,13 @@ def served(request: pytest.FixtureRequest) -> Iterator[Served]:
         client = ModbusTcpClient("127.0.0.1", port=listener.address[1], timeout=2, retries=0)
     elif request.param == "rtu+tcp":
         listener = listen("127.0.0.1", 0)
-        server = serve_rtu_over_tcp(runner, listener, devices.values(), LineSettings(9600))
+        server = serve_rtu_over_tcp(runner, listener, devices.values(), line_settings(9600))
         port = listener.address[1]
         client = ModbusTcpClient(
             "127.0.0.1", port=port, framer=FramerType.RTU, timeout=2, retries=0
         )
     else:
-        settings = LineSettings(38400, 8, "E", 1)
+        settings = line_settings(38400, 8, "E", 1)
         pty = open_pty(settings)
         server = serve_rtu(runner, pty, devices.values(), Link.RS485, settings)
         assert pty.peer_path is not None

@@ -27,11 +27,11 @@ from fieldtwin.modbus.model import (
 from fieldtwin.modbus.pdu import decode_response, encode_request
 from fieldtwin.modbus.slave import Transmission
 from fieldtwin.modbus.timing import RtuTiming
-from fieldtwin.transports.base import LineSettings
+from fieldtwin.transports.base import line_settings
 from tests.modbus.modbus_fakes import TableDevice
 from tests.modbus.modbus_strategies import small_requests
 
-TIMING = RtuTiming.from_format(LineSettings(38400, 8, "E", 1))
+TIMING = RtuTiming.from_format(line_settings(38400, 8, "E", 1))
 CT, T35 = TIMING.char_us, TIMING.t35_us
 FAR = 10**9
 

@@ -15,13 +15,13 @@ from fieldtwin.modbus.pdu import encode_request
 from fieldtwin.modbus.timing import RtuTiming
 from fieldtwin.runtime.modbus_server import serve_rtu, serve_rtu_over_tcp, serve_tcp
 from fieldtwin.runtime.runner import Runner
-from fieldtwin.transports.base import LineSettings, Transport
+from fieldtwin.transports.base import Transport, line_settings
 from fieldtwin.transports.memory import memory_pair
 from fieldtwin.transports.pty import open_pty
 from fieldtwin.transports.tcp import TcpTransport, connect, listen
 from tests.modbus.modbus_fakes import TableDevice
 
-LINE = LineSettings(38400, 8, "E", 1)
+LINE = line_settings(38400, 8, "E", 1)
 LIMIT = 2_000 * MS  # every run is bounded
 
 
@@ -137,7 +137,7 @@ def test_rtu_over_tcp_cuts_frames_by_length(runner: Runner) -> None:
 
 def test_rtu_line_on_a_pty_answers_a_serial_peer() -> None:
     runner = Runner(SimClock(), speed=1.0)
-    settings = LineSettings(9600, 8, "E", 1)
+    settings = line_settings(9600, 8, "E", 1)
     pty = open_pty(settings)
     server = serve_rtu(runner, pty, [TableDevice(3), TableDevice(4)], Link.RS485, settings)
     assert server.describe() == f"listening: modbus-rtu pty {pty.peer_path} slaves 3,4 (9600 8E1)"

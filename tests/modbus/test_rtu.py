@@ -10,10 +10,10 @@ from fieldtwin.modbus.model import Counter, ReadWords, Request
 from fieldtwin.modbus.pdu import encode_request, request_length
 from fieldtwin.modbus.rtu import Fault, Frame, FramerEvent, RtuFramer, State
 from fieldtwin.modbus.timing import RtuTiming
-from fieldtwin.transports.base import LineSettings
+from fieldtwin.transports.base import line_settings
 from tests.modbus.modbus_strategies import small_requests
 
-LINE = LineSettings(9600, 8, "E", 1)
+LINE = line_settings(9600, 8, "E", 1)
 TIMING = RtuTiming.from_format(LINE)  # char 1146 us, t1.5 1719 us, t3.5 4010 us
 CT, T15, T35 = TIMING.char_us, TIMING.t15_us, TIMING.t35_us
 FAR = 10**9

@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import pytest
 
+from fieldtwin.charformat import CharFormat
 from fieldtwin.errors import ConfigError
 from fieldtwin.modbus.model import (
     ReadBits,
@@ -25,7 +24,7 @@ from fieldtwin.modbus.timing import (
     request_bytes,
     request_exchange_time_us,
 )
-from fieldtwin.transports.base import LineSettings
+from fieldtwin.transports.base import line_settings
 
 
 def test_section_7_2_7_one_word_write_at_38400_is_about_9_3_ms() -> None:
@@ -35,7 +34,7 @@ def test_section_7_2_7_one_word_write_at_38400_is_about_9_3_ms() -> None:
 
 
 def test_section_7_2_7_from_a_request_and_the_line_format() -> None:
-    line = LineSettings(baud=38400, data_bits=8, parity="E", stop_bits=1)
+    line = line_settings(baud=38400, data_bits=8, parity="E", stop_bits=1)
     assert bits_per_char(line) == 11
     assert request_exchange_time_us(WriteWord(0x10, 1), line) == 9302
 
@@ -45,17 +44,9 @@ def test_section_7_2_7_nb_is_8_to_11() -> None:
         exchange_time_us(12, 9600, 8, 8)
 
 
-@dataclass(frozen=True)
-class _Fmt:
-    baud: int
-    data_bits: int = 8
-    parity: str = "N"
-    stop_bits: int = 1
-
-
 def test_bad_format_is_a_config_error() -> None:
     with pytest.raises(ConfigError, match="parity"):
-        bits_per_char(_Fmt(9600, parity="X"))
+        bits_per_char(CharFormat(9600, parity="X"))  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize(
@@ -76,13 +67,13 @@ def test_section_7_2_frame_lengths(request_: Request, nq: int, nr: int) -> None:
 
 
 def test_rtu_silences_from_the_line_format() -> None:
-    timing = RtuTiming.from_format(LineSettings(9600, 8, "E", 1))
+    timing = RtuTiming.from_format(line_settings(9600, 8, "E", 1))
     # 11 bits at 9600 baud: 1145.8 us per character.
     assert (timing.char_us, timing.t15_us, timing.t35_us) == (1146, 1719, 4010)
 
 
 def test_relaxed_timing_keeps_t35_above_t15() -> None:
-    timing = RtuTiming.from_format(LineSettings(115200)).relaxed(5000, eager=True)
+    timing = RtuTiming.from_format(line_settings(115200)).relaxed(5000, eager=True)
     assert timing.t15_us == 5000 and timing.t35_us == 10000 and timing.eager
 
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Collection, Sequence
+from collections.abc import Collection
 from dataclasses import dataclass, field
 
 from fieldtwin.errors import TransportError
@@ -96,6 +96,16 @@ class FakeWall:
         self.waits: list[float | None] = []
         self._arrivals: list[_Arrival] = []
         self._targets: list[FakeLine | FakeListener] = []
+        self.fds: set[int] = set()  # what the runner watches for reading
+
+    def watch(self, fd: int, read: bool = True, write: bool = False) -> None:
+        if read:
+            self.fds.add(fd)
+        else:
+            self.fds.discard(fd)
+
+    def forget(self, fd: int) -> None:
+        self.fds.discard(fd)
 
     def monotonic(self) -> float:
         return self.now
@@ -125,7 +135,8 @@ class FakeWall:
                 assert not isinstance(arrival.data, bytes)
                 arrival.target.waiting.append(arrival.data)
 
-    def wait(self, fds: Sequence[int], timeout: float | None) -> Collection[int]:
+    def wait(self, timeout: float | None) -> tuple[Collection[int], Collection[int]]:
+        fds = self.fds
         assert timeout is None or timeout >= 0, f"negative wait {timeout}"
         self.waits.append(timeout)
         pending = [a for a in self._arrivals if a.target.fileno() in fds]
@@ -135,7 +146,7 @@ class FakeWall:
             assert timeout is not None, "the runner would block forever"
             self.now += timeout
         self._land()
-        return self._ready(fds)
+        return self._ready(fds), ()
 
-    def _ready(self, fds: Sequence[int]) -> list[int]:
+    def _ready(self, fds: Collection[int]) -> list[int]:
         return [fd for fd in fds if any(t.fileno() == fd and t.readable for t in self._targets)]

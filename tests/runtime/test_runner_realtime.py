@@ -86,19 +86,22 @@ def test_system_wall_reregisters_when_the_fd_set_changes() -> None:
     wall = SystemWall()
     try:
         r1, w1 = os.pipe()
-        fds = (r1,)
-        assert list(wall.wait(fds, 0)) == []
+        wall.watch(r1)
+        assert list(wall.wait(0)[0]) == []
         os.write(w1, b"x")
-        assert list(wall.wait(fds, 5.0)) == [r1]
+        assert list(wall.wait(5.0)[0]) == [r1]
+        wall.forget(r1)
         os.close(r1)
         os.close(w1)
         r2, w2 = os.pipe()  # likely the same numbers again
         os.write(w2, b"y")
-        assert list(wall.wait((r2,), 5.0)) == [r2]  # a new tuple: registered afresh
+        wall.watch(r2)
+        assert list(wall.wait(5.0)[0]) == [r2]  # forgotten, then registered afresh
+        wall.forget(r2)
         os.close(r2)
         os.close(w2)
         start = wall.monotonic()
-        assert list(wall.wait((), 0.01)) == []  # nothing registered: a bounded sleep
+        assert list(wall.wait(0.01)[0]) == []  # nothing registered: a bounded sleep
         assert wall.monotonic() >= start
     finally:
         wall.close()

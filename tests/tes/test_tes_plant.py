@@ -172,7 +172,7 @@ def test_3_1_4_an_rs232_line_takes_the_rs232_format(tmp_path: Path) -> None:
     table = {"model": "TES 8ESA", "endpoint": "pty", "link": "rs232", "store": "eeprom.db"}
     (tes,) = _build(tmp_path, {**table, "name": "esa"})
     settings = line_settings(parse_endpoint("pty"), [tes], Link.RS232)
-    assert (settings.baud, settings.data_bits, settings.parity, settings.stop_bits) == (
+    assert (settings.baud, settings.data_bits, settings.parity.letter, settings.stop_bits) == (
         19200, 8, "O", 1,
     )  # fmt: skip
     with pytest.raises(ConfigError, match=r"rs232\.baud / rs232\.parity"):

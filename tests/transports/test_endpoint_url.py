@@ -7,7 +7,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from fieldtwin.errors import ConfigError
-from fieldtwin.transports.base import LineSettings
+from fieldtwin.transports.base import line_settings
 from fieldtwin.transports.pty import PtyTransport
 from fieldtwin.transports.serial import SerialTransport
 from fieldtwin.transports.tcp import TcpListener
@@ -21,7 +21,7 @@ from tests.transports.transport_pumping import collect
         ("memory", Endpoint("memory")),
         ("pty", Endpoint("pty")),
         (" pty ", Endpoint("pty")),
-        ("pty?baud=19200&parity=E", Endpoint("pty", settings=LineSettings(19200, 8, "E", 1))),
+        ("pty?baud=19200&parity=E", Endpoint("pty", settings=line_settings(19200, 8, "E", 1))),
         ("tcp://127.0.0.1:5020", Endpoint("tcp", host="127.0.0.1", port=5020)),
         ("tcp://localhost:502", Endpoint("tcp", host="localhost", port=502)),
         ("tcp://0.0.0.0:0", Endpoint("tcp", host="0.0.0.0", port=0)),
@@ -29,15 +29,15 @@ from tests.transports.transport_pumping import collect
         ("rtu+tcp://127.0.0.1:5021", Endpoint("rtu+tcp", host="127.0.0.1", port=5021)),
         (
             "serial:///dev/ttyUSB0",
-            Endpoint("serial", device="/dev/ttyUSB0", settings=LineSettings()),
+            Endpoint("serial", device="/dev/ttyUSB0", settings=line_settings()),
         ),
         (
             "serial:///dev/ttyUSB0?baud=38400&parity=E&data=8&stop=1",
-            Endpoint("serial", device="/dev/ttyUSB0", settings=LineSettings(38400, 8, "E", 1)),
+            Endpoint("serial", device="/dev/ttyUSB0", settings=line_settings(38400, 8, "E", 1)),
         ),
         (
             "serial:///dev/pts/7?data=7&parity=o&stop=2",
-            Endpoint("serial", device="/dev/pts/7", settings=LineSettings(9600, 7, "O", 2)),
+            Endpoint("serial", device="/dev/pts/7", settings=line_settings(9600, 7, "O", 2)),
         ),
     ],
 )
@@ -80,7 +80,7 @@ def test_is_tcp() -> None:
 
 
 settings = st.builds(
-    LineSettings,
+    line_settings,
     baud=st.integers(1, 4_000_000),
     data_bits=st.sampled_from([7, 8]),
     parity=st.sampled_from(["N", "E", "O"]),
@@ -112,7 +112,7 @@ def test_str_parses_back_to_the_same_endpoint(endpoint: Endpoint) -> None:
 def test_open_endpoint_opens_the_twins_side() -> None:
     pty = open_endpoint(parse_endpoint("pty?baud=19200&parity=E"))
     assert isinstance(pty, PtyTransport)
-    assert pty.settings == LineSettings(19200, 8, "E", 1)
+    assert pty.settings == line_settings(19200, 8, "E", 1)
     try:
         port = open_endpoint(parse_endpoint(f"serial://{pty.peer_path}?baud=19200&parity=E"))
         assert isinstance(port, SerialTransport)
@@ -130,3 +130,9 @@ def test_open_endpoint_opens_the_twins_side() -> None:
 def test_a_memory_endpoint_cannot_be_opened_alone() -> None:
     with pytest.raises(ConfigError, match="memory_pair"):
         open_endpoint(parse_endpoint("memory"))
+
+
+@pytest.mark.parametrize("url", ["pty?baud=²", "pty?baud=١٢", "serial:///dev/ttyS0?stop=³"])
+def test_unicode_digits_are_a_config_error_not_a_traceback(url: str) -> None:
+    with pytest.raises(ConfigError, match=r"is not a whole number"):
+        parse_endpoint(url)

@@ -7,24 +7,24 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from fieldtwin.errors import ConfigError
-from fieldtwin.transports.base import LineSettings
+from fieldtwin.transports.base import LineSettings, line_settings
 
 
 @pytest.mark.parametrize(
     ("settings", "bits", "char_us"),
     [
-        (LineSettings(), 10, 1042),  # 9600 8N1: 1041.67 us
-        (LineSettings(9600, 8, "E", 1), 11, 1146),  # 1145.83 us
-        (LineSettings(19200, 8, "E", 1), 11, 573),  # 572.92 us
-        (LineSettings(19200, 7, "O", 2), 11, 573),
-        (LineSettings(38400, 8, "N", 1), 10, 260),  # 260.42 us
-        (LineSettings(1200, 7, "N", 1), 9, 7500),
-        (LineSettings(300, 8, "N", 2), 11, 36667),  # 36666.67 us
+        (line_settings(), 10, 1042),  # 9600 8N1: 1041.67 us
+        (line_settings(9600, 8, "E", 1), 11, 1146),  # 1145.83 us
+        (line_settings(19200, 8, "E", 1), 11, 573),  # 572.92 us
+        (line_settings(19200, 7, "O", 2), 11, 573),
+        (line_settings(38400, 8, "N", 1), 10, 260),  # 260.42 us
+        (line_settings(1200, 7, "N", 1), 9, 7500),
+        (line_settings(300, 8, "N", 2), 11, 36667),  # 36666.67 us
     ],
 )
 def test_char_time(settings: LineSettings, bits: int, char_us: int) -> None:
-    assert settings.bits_per_char == bits
-    assert settings.char_time_us() == char_us
+    assert settings.bits == bits
+    assert settings.char_time_us == char_us
 
 
 @given(
@@ -37,7 +37,7 @@ def test_char_time_is_the_bit_count_over_baud_rounded(
     baud: int, data: int, parity: str, stop: int
 ) -> None:
     bits = 1 + data + (parity != "N") + stop
-    char_us = LineSettings(baud, data, parity, stop).char_time_us()
+    char_us = line_settings(baud, data, parity, stop).char_time_us
     assert abs(char_us - bits * 1_000_000 / baud) <= 0.5
 
 
@@ -58,8 +58,8 @@ def test_bad_values_name_the_field_and_the_allowed_values(
     kwargs: dict[str, object], message: str
 ) -> None:
     with pytest.raises(ConfigError, match=message):
-        LineSettings(**kwargs)  # type: ignore[arg-type]
+        line_settings(**kwargs)  # type: ignore[arg-type]
 
 
 def test_str() -> None:
-    assert str(LineSettings(19200, 8, "E", 1)) == "19200 8E1"
+    assert str(line_settings(19200, 8, "E", 1)) == "19200 8E1"

@@ -9,7 +9,7 @@ from collections.abc import Iterator
 import pytest
 import serial
 
-from fieldtwin.transports.base import LineSettings
+from fieldtwin.transports.base import line_settings
 from fieldtwin.transports.pty import PtyTransport, open_pty
 from tests.transports.transport_pumping import collect
 
@@ -59,11 +59,11 @@ def test_name_and_peer_path(pty: PtyTransport) -> None:
     assert pty.peer_path is not None and os.path.exists(pty.peer_path)
     assert pty.name == f"pty:{pty.peer_path}"
     assert pty.is_real
-    assert pty.settings == LineSettings()
+    assert pty.settings == line_settings()
 
 
 def test_line_settings_baud_is_visible_to_the_peer() -> None:
-    transport = open_pty(LineSettings(baud=19200, parity="E"))
+    transport = open_pty(line_settings(baud=19200, parity="E"))
     try:
         assert transport.peer_path is not None
         fd = os.open(transport.peer_path, os.O_RDWR | os.O_NOCTTY)
@@ -78,7 +78,7 @@ def test_line_settings_baud_is_visible_to_the_peer() -> None:
 
 
 def test_a_non_standard_baud_still_opens() -> None:
-    transport = open_pty(LineSettings(baud=12345))
+    transport = open_pty(line_settings(baud=12345))
     try:
         assert transport.settings.baud == 12345
     finally:

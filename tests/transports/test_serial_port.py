@@ -6,7 +6,7 @@ import pytest
 import serial as pyserial
 
 from fieldtwin.errors import TransportError
-from fieldtwin.transports.base import LineSettings
+from fieldtwin.transports.base import LineSettings, line_settings
 from fieldtwin.transports.pty import open_pty
 from fieldtwin.transports.serial import open_serial
 from tests.transports.transport_pumping import collect
@@ -14,15 +14,15 @@ from tests.transports.transport_pumping import collect
 
 def test_opening_a_missing_device_names_it() -> None:
     with pytest.raises(TransportError, match="/dev/no-such-tty"):
-        open_serial("/dev/no-such-tty", LineSettings())
+        open_serial("/dev/no-such-tty", line_settings())
 
 
 @pytest.mark.parametrize(
     ("settings", "parity"),
     [
-        (LineSettings(9600, 8, "N", 1), pyserial.PARITY_NONE),
-        (LineSettings(19200, 7, "E", 2), pyserial.PARITY_EVEN),
-        (LineSettings(38400, 8, "O", 1), pyserial.PARITY_ODD),
+        (line_settings(9600, 8, "N", 1), pyserial.PARITY_NONE),
+        (line_settings(19200, 7, "E", 2), pyserial.PARITY_EVEN),
+        (line_settings(38400, 8, "O", 1), pyserial.PARITY_ODD),
     ],
 )
 def test_line_settings_reach_the_port(settings: LineSettings, parity: str) -> None:
@@ -48,7 +48,7 @@ def test_default_settings_are_9600_8n1() -> None:
     assert master.peer_path is not None
     port = open_serial(master.peer_path)
     try:
-        assert port.settings == LineSettings(9600, 8, "N", 1)
+        assert port.settings == line_settings(9600, 8, "N", 1)
         port.send(b"abc")
         assert collect(master, port, 3) == b"abc"
     finally:

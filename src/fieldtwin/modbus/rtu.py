@@ -10,6 +10,21 @@ the next t3.5 silence are "not analysed frames by default of silent time"
 counted as wrong characters; one whose CRC does not check is first split into
 back-to-back frames by their Nq / Nr lengths (TES 7.2), and what remains is one
 CRC error.  The framer is sans-IO: ``receive``, ``poll``, ``next_deadline``.
+
+Bounds (issue 10 item 5, DESIGN rule 14):
+
+* The frame buffer never holds more than MAX_FRAME (256) bytes that are not a
+  complete frame: whole, CRC-checked frames at its head are cut off as they
+  complete (back-to-back frames are never dropped), and a frame that grows
+  past 256 bytes is discarded; its characters up to the next t3.5 silence are
+  ignored and it counts as one frame with a CRC error (TES 6.2.3.2 01Ah).  No
+  CRC is ever run over more than MAX_FRAME + one chunk.
+* A real line (``RtuTiming.max_lead_us`` set) cannot carry bytes faster than
+  its baud rate: a chunk is placed on the line ending at its arrival time
+  (back-dated into the silence before it), and characters that would end more
+  than ``max_lead_us`` after their arrival are a UART overrun: lost, counted
+  as wrong characters (TES 6.2.3.2 01Bh).  After a burst of any length the
+  line is therefore free again at most ``max_lead_us`` + t3.5 later.
 """
 
 from __future__ import annotations
@@ -18,12 +33,14 @@ import enum
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from fieldtwin.errors import ProtocolError
+from fieldtwin.fsm import Machine, Table
 from fieldtwin.modbus.crc import crc_ok
 from fieldtwin.modbus.model import Counter
 from fieldtwin.modbus.timing import RtuTiming
 
 MIN_FRAME = 4  # TES 7.2.6: the shortest frame, slave + 07 + CRC16
+MAX_FRAME = 256  # Modbus RTU: slave + PDU (at most 253) + CRC16
+HEADER = 7  # bytes request_length needs to know a frame's length
 
 LengthOf = Callable[[bytes], int | None]
 
@@ -60,24 +77,26 @@ class State(enum.Enum):
     IDLE = "idle"  # the line has been silent for t3.5: the next character starts a frame
     RECEIVING = "receiving"  # characters at most t1.5 apart
     BROKEN = "broken"  # a silence in (t1.5, t3.5) cut the frame; wait for t3.5
+    OVERLONG = "overlong"  # the frame passed MAX_FRAME bytes: ignore until t3.5
 
 
 class Input(enum.Enum):
     CHAR = "char"  # a chunk whose first character follows a silence <= t1.5 (or starts a frame)
     LATE_CHAR = "late_char"  # its first character follows a silence in (t1.5, t3.5)
     SILENCE = "silence"  # t3.5 since the last character
-    COMPLETE = "complete"  # eager mode: the buffer held whole frames only, all handed over
+    COMPLETE = "complete"  # the buffer held whole frames only, all handed over
+    OVERFLOW = "overflow"  # more than MAX_FRAME bytes that are not a complete frame
 
 
 def split_frames(buf: bytes, length_of: LengthOf) -> tuple[list[bytes], bytes]:
     """Back-to-back frames in ``buf`` by their lengths; returns (frames, bad rest)."""
     frames: list[bytes] = []
     while buf:
-        n = length_of(buf)
-        if n is not None and MIN_FRAME <= n < len(buf) and crc_ok(buf[:n]):
+        n = length_of(buf[:HEADER])
+        if n is not None and MIN_FRAME <= n <= MAX_FRAME and n < len(buf) and crc_ok(buf[:n]):
             frames.append(buf[:n])
             buf = buf[n:]
-        elif len(buf) >= MIN_FRAME and crc_ok(buf):
+        elif MIN_FRAME <= len(buf) <= MAX_FRAME and crc_ok(buf):
             frames.append(buf)
             return frames, b""
         else:
@@ -91,34 +110,21 @@ class RtuFramer:
     def __init__(self, timing: RtuTiming, length_of: LengthOf) -> None:
         self.timing = timing
         self._length_of = length_of
-        self.state = State.IDLE
+        self._machine: Machine[State, Input, RtuFramer] = Machine(FRAMER, State.IDLE, self)
         self._buf = bytearray()
         self._last_end = -(10**18)  # end of the last character received
         self._events: list[FramerEvent] = []
-        self._table: dict[tuple[State, Input], tuple[Callable[[bytes, int], None], State]] = {
-            (State.IDLE, Input.CHAR): (self._start, State.RECEIVING),
-            (State.RECEIVING, Input.CHAR): (self._append, State.RECEIVING),
-            (State.RECEIVING, Input.LATE_CHAR): (self._discard, State.BROKEN),
-            (State.RECEIVING, Input.SILENCE): (self._finish, State.IDLE),
-            (State.RECEIVING, Input.COMPLETE): (self._ignore, State.IDLE),
-            (State.BROKEN, Input.CHAR): (self._ignore, State.BROKEN),
-            (State.BROKEN, Input.LATE_CHAR): (self._ignore, State.BROKEN),
-            (State.BROKEN, Input.SILENCE): (self._not_analysed, State.IDLE),
-        }
+
+    @property
+    def state(self) -> State:
+        return self._machine.state
 
     # -- the sans-IO surface -------------------------------------------------------
 
     def receive(self, data: bytes, now: int) -> list[FramerEvent]:
         """Take a chunk that arrived at ``now``; return the events it completes."""
         if data:
-            start = max(now, self._last_end)
-            self._settle(start)
-            gap = start - self._last_end
-            late = self.state is not State.IDLE and gap > self.timing.t15_us
-            self._fire(Input.LATE_CHAR if late else Input.CHAR, bytes(data), start)
-            self._last_end = start + len(data) * self.timing.char_us
-            if self.timing.eager and self.state is State.RECEIVING:
-                self._cut_complete(self._last_end)
+            self._chunk(data, now)
         return self._take(now)
 
     def poll(self, now: int) -> list[FramerEvent]:
@@ -137,43 +143,64 @@ class RtuFramer:
             return None
         return self._last_end + self.timing.t35_us
 
-    # -- transitions ---------------------------------------------------------------
+    # -- one chunk -----------------------------------------------------------------
 
-    def _fire(self, event: Input, data: bytes, at: int) -> None:
-        try:
-            action, target = self._table[(self.state, event)]
-        except KeyError:
-            raise ProtocolError(f"RTU framer can't handle {event} in state {self.state}") from None
-        action(data, at)
-        self.state = target
+    def _chunk(self, data: bytes, now: int) -> None:
+        timing = self.timing
+        char = timing.char_us
+        start = max(now, self._last_end)
+        if timing.max_lead_us is not None:
+            # a real line: the chunk was on the wire before it was read, not after
+            start = max(self._last_end, now - len(data) * char)
+            room = max(0, (now + timing.max_lead_us - start) // char)
+            if len(data) > room:
+                # TES 6.2.3.2 01Bh: characters lost to a UART overrun are wrong characters
+                self._events.append(Fault(Counter.WRONG_CHARACTERS, len(data) - room, now))
+                data = data[:room]
+                if not data:
+                    return
+        self._settle(start)
+        late = self.state is not State.IDLE and start - self._last_end > timing.t15_us
+        self._last_end = start + len(data) * char
+        self._machine.fire(Input.LATE_CHAR if late else Input.CHAR, data)
+        if self.state is State.RECEIVING and (timing.eager or len(self._buf) > MAX_FRAME):
+            self._cut(self._last_end, timing.eager)
+        if self.state is State.RECEIVING and len(self._buf) > MAX_FRAME:
+            self._machine.fire(Input.OVERFLOW)
 
     def _settle(self, now: int) -> None:
         deadline = self._silence_deadline()
         if deadline is not None and deadline <= now:
-            self._fire(Input.SILENCE, b"", deadline)
+            self._machine.fire(Input.SILENCE, deadline)
 
-    def _start(self, data: bytes, at: int) -> None:
+    # -- actions (the table's) ------------------------------------------------------
+
+    def _start(self, data: bytes) -> None:
         self._buf = bytearray(data)
 
-    def _append(self, data: bytes, at: int) -> None:
+    def _append(self, data: bytes) -> None:
         self._buf += data
 
-    def _discard(self, data: bytes, at: int) -> None:
+    def _discard(self, data: bytes) -> None:
         # Modbus RTU: a silence > t1.5 inside a frame makes it incomplete.
         self._buf.clear()
 
-    def _ignore(self, data: bytes, at: int) -> None:
+    def _ignore(self, data: bytes) -> None:
         pass
 
-    def _not_analysed(self, data: bytes, at: int) -> None:
+    def _not_analysed(self, at: int) -> None:
         # TES 6.2.3.2 01Dh/024h: "not analysed frames by default of silent time".
         self._events.append(Fault(Counter.NO_SILENCE, 1, at))
 
-    def _finish(self, data: bytes, at: int) -> None:
-        buf, self._buf = bytes(self._buf), bytearray()
-        self._analyse(buf, at)
+    def _overflow(self) -> None:
+        self._buf.clear()
 
-    def _analyse(self, buf: bytes, at: int) -> None:
+    def _overlong(self, at: int) -> None:
+        # TES 6.2.3.2 01Ah: a frame too long to hold cannot pass its CRC check.
+        self._events.append(Fault(Counter.CRC_ERRORS, 1, at))
+
+    def _finish(self, at: int) -> None:
+        buf, self._buf = bytes(self._buf), bytearray()
         frames, rest = split_frames(buf, self._length_of)
         self._events.extend(Frame(f, at) for f in frames)
         if not rest:
@@ -185,23 +212,35 @@ class RtuFramer:
             # TES 6.2.3.2 01Ah: "received frames with CRC16 errors".
             self._events.append(Fault(Counter.CRC_ERRORS, 1, at))
 
-    def _cut_complete(self, last_end: int) -> None:
-        """Eager mode: cut every complete, CRC-checked frame at the buffer head.
+    # -- cutting complete frames off the head --------------------------------------
 
-        Each frame is handed over when its own last character has arrived,
-        without waiting for the t3.5 silence.
+    def _cut(self, last_end: int, all_done: bool) -> None:
+        """Hand over every complete, CRC-checked frame at the buffer head.
+
+        Each frame is due when its own last character has arrived, without
+        waiting for the t3.5 silence (eager mode, or a buffer past MAX_FRAME).
+        One pass with an offset: a chunk of many frames costs O(its length).
         """
         buf = self._buf
-        while True:
-            n = self._length_of(bytes(buf[:7]))
-            if n is None or n < MIN_FRAME or len(buf) < n or not crc_ok(buf[:n]):
-                return
-            at = last_end - (len(buf) - n) * self.timing.char_us
-            self._events.append(Frame(bytes(buf[:n]), at))
-            del buf[:n]
-            if not buf:
-                self._fire(Input.COMPLETE, b"", last_end)
-                return
+        view = memoryview(buf)
+        size, offset = len(buf), 0
+        try:
+            while True:
+                n = self._length_of(bytes(view[offset : offset + HEADER]))
+                if n is None or not MIN_FRAME <= n <= MAX_FRAME:
+                    break  # not a frame, or longer than any RTU frame may be
+                end = offset + n
+                if end > size or not crc_ok(view[offset:end]):
+                    break
+                at = last_end - (size - end) * self.timing.char_us
+                self._events.append(Frame(bytes(view[offset:end]), at))
+                offset = end
+        finally:
+            view.release()
+        if offset:
+            del buf[:offset]
+        if not buf and all_done and offset:
+            self._machine.fire(Input.COMPLETE)
 
     def _take(self, now: int) -> list[FramerEvent]:
         """Events due by ``now`` (an eager frame waits for its last character's time)."""
@@ -211,3 +250,24 @@ class RtuFramer:
             due += 1
         taken, self._events = events[:due], events[due:]
         return taken
+
+
+FRAMER: Table[State, Input] = Table(
+    "RTU framer",
+    State,
+    Input,
+    {
+        (State.IDLE, Input.CHAR): (RtuFramer._start, State.RECEIVING),
+        (State.RECEIVING, Input.CHAR): (RtuFramer._append, State.RECEIVING),
+        (State.RECEIVING, Input.LATE_CHAR): (RtuFramer._discard, State.BROKEN),
+        (State.RECEIVING, Input.SILENCE): (RtuFramer._finish, State.IDLE),
+        (State.RECEIVING, Input.COMPLETE): (None, State.IDLE),
+        (State.RECEIVING, Input.OVERFLOW): (RtuFramer._overflow, State.OVERLONG),
+        (State.BROKEN, Input.CHAR): (RtuFramer._ignore, State.BROKEN),
+        (State.BROKEN, Input.LATE_CHAR): (RtuFramer._ignore, State.BROKEN),
+        (State.BROKEN, Input.SILENCE): (RtuFramer._not_analysed, State.IDLE),
+        (State.OVERLONG, Input.CHAR): (RtuFramer._ignore, State.OVERLONG),
+        (State.OVERLONG, Input.LATE_CHAR): (RtuFramer._ignore, State.OVERLONG),
+        (State.OVERLONG, Input.SILENCE): (RtuFramer._overlong, State.IDLE),
+    },
+)

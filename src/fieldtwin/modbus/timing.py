@@ -1,15 +1,15 @@
 """Character times, RTU silences and the TES transmission-time model (TES 7.2.7).
 
-Nothing here imports the transports: a line's character format is anything with
-``baud``, ``data_bits``, ``parity`` and ``stop_bits`` (``LineSettings`` fits).
+Nothing here imports the transports: a line's character format is the kernel's
+``fieldtwin.charformat.CharFormat`` (the transports' ``LineSettings`` is that value).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Protocol
 
+from fieldtwin.charformat import CharFormat
 from fieldtwin.clock import MS, S
 from fieldtwin.errors import ConfigError
 from fieldtwin.modbus.model import (
@@ -22,31 +22,14 @@ from fieldtwin.modbus.model import (
 )
 
 
-class CharFormat(Protocol):
-    """A serial character format (``fieldtwin.transports.base.LineSettings`` fits)."""
-
-    @property
-    def baud(self) -> int: ...
-    @property
-    def data_bits(self) -> int: ...
-    @property
-    def parity(self) -> str: ...
-    @property
-    def stop_bits(self) -> int: ...
-
-
 def bits_per_char(fmt: CharFormat) -> int:
     """Nb of TES 7.2.7: start + data + parity + stop bits ("from 8 to 11")."""
-    if fmt.parity not in ("N", "E", "O"):
-        raise ConfigError(f"parity {fmt.parity!r}: allowed N, E, O")
-    return 1 + fmt.data_bits + (0 if fmt.parity == "N" else 1) + fmt.stop_bits
+    return fmt.bits
 
 
 def char_time(fmt: CharFormat) -> Fraction:
     """One character's duration in microseconds, exactly."""
-    if fmt.baud <= 0:
-        raise ConfigError(f"baud {fmt.baud}: must be > 0")
-    return Fraction(bits_per_char(fmt) * S, fmt.baud)
+    return fmt.char_time
 
 
 @dataclass(frozen=True, slots=True)
@@ -56,17 +39,23 @@ class RtuTiming:
     ``char_us``: one character; ``t15_us``: the longest silence allowed inside a
     frame; ``t35_us``: the silence that ends a frame.  ``eager``: a frame whose
     length and CRC check is complete at once, without waiting for the silence
-    (for streams that carry no timing, such as RTU over TCP).
+    (for streams that carry no timing, such as RTU over TCP).  ``max_lead_us``: on
+    a real line, how far behind their arrival characters may still be carried
+    at the baud rate; beyond it they are a UART overrun (None: a simulated line,
+    whose bytes are all carried, spread after their arrival).
     """
 
     char_us: int
     t15_us: int
     t35_us: int
     eager: bool = False
+    max_lead_us: int | None = None
 
     def __post_init__(self) -> None:
         if not (self.char_us > 0 and 0 < self.t15_us < self.t35_us):
             raise ConfigError(f"RTU timing {self}: need 0 < char, 0 < t1.5 < t3.5")
+        if self.max_lead_us is not None and self.max_lead_us < 0:
+            raise ConfigError(f"RTU timing {self}: max_lead_us must be >= 0")
 
     @classmethod
     def from_format(cls, fmt: CharFormat) -> RtuTiming:
@@ -74,14 +63,16 @@ class RtuTiming:
         ct = char_time(fmt)
         return cls(round(ct), round(ct * 3 / 2), round(ct * 7 / 2))
 
-    def relaxed(self, floor_us: int, eager: bool = False) -> RtuTiming:
+    def relaxed(
+        self, floor_us: int, eager: bool = False, max_lead_us: int | None = None
+    ) -> RtuTiming:
         """The same line with silences at least ``floor_us`` / 2 x ``floor_us``.
 
         Real transports (ptys, TCP) deliver bytes with operating-system jitter and
         no line timing; a floor keeps one frame from being cut in two.
         """
         t15 = max(self.t15_us, floor_us)
-        return RtuTiming(self.char_us, t15, max(self.t35_us, 2 * t15), eager)
+        return RtuTiming(self.char_us, t15, max(self.t35_us, 2 * t15), eager, max_lead_us)
 
 
 # --- TES 7.2.7 transmission time -------------------------------------------------

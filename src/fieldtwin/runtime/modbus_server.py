@@ -16,11 +16,13 @@ from fieldtwin.clock import MS, Handle
 from fieldtwin.errors import TransportError
 from fieldtwin.modbus.line import RtuLine, Wiring
 from fieldtwin.modbus.model import Link, SlaveDevice
+from fieldtwin.modbus.rtu import MAX_FRAME
 from fieldtwin.modbus.session import TcpSession
 from fieldtwin.modbus.slave import SlaveSet, Transmission
 from fieldtwin.modbus.timing import RtuTiming
 from fieldtwin.runtime.runner import Runner
 from fieldtwin.transports.base import LineSettings, Listener, Transport
+from fieldtwin.transports.tcp import listener_url
 
 # Real transports deliver bytes with operating-system jitter and no line timing:
 # a frame complete by length and CRC is taken at once (eager), and inside a
@@ -42,11 +44,20 @@ class Core(Protocol):
 class _Pump:
     """One core bound to one transport on the runner's clock."""
 
-    def __init__(self, runner: Runner, transport: Transport, core: Core) -> None:
+    def __init__(
+        self,
+        runner: Runner,
+        transport: Transport,
+        core: Core,
+        served: dict[int, _Pump] | None = None,
+    ) -> None:
         self.runner = runner
         self.transport = transport
         self.core = core
         self._timer: Handle | None = None
+        self._served = served  # the server's open pumps: this one leaves it on close
+        if served is not None:
+            served[id(self)] = self
         runner.attach(transport, self.on_data, self.on_close)
 
     def on_data(self, data: bytes, now: int) -> None:
@@ -57,6 +68,8 @@ class _Pump:
         self.close()
 
     def close(self) -> None:
+        if self._served is not None:
+            self._served.pop(id(self), None)
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
@@ -90,8 +103,19 @@ class _Pump:
         self._timer = None if deadline is None else self.runner.clock.schedule(deadline, self._wake)
 
 
+def url_of(scheme: str, listener: Listener) -> str:
+    """The endpoint URL a listener is bound to, one that parses back (``tcp://[::]:502``)."""
+    return listener_url(scheme, listener.address)
+
+
 def _slaves_text(slaves: SlaveSet) -> str:
     return ",".join(str(n) for n in slaves.numbers)
+
+
+def _max_lead(timing: RtuTiming) -> int:
+    """A real line carries at most one longest frame beyond what the wall has seen
+    (issue 10 item 5): more is a UART overrun (see modbus/rtu.py)."""
+    return MAX_FRAME * timing.char_us
 
 
 def _scaled(runner: Runner, floor_us: int) -> int:
@@ -117,7 +141,8 @@ class ModbusServer:
         self.slaves = slaves
         self._line = line
         self._listener = listener
-        self.pumps: list[_Pump] = []
+        # open transports served, by id: a pump leaves on close, so churn never grows it
+        self.pumps: dict[int, _Pump] = {}
         self.closed = False
 
     def describe(self) -> str:
@@ -128,8 +153,7 @@ class ModbusServer:
     @property
     def connections(self) -> int:
         """Open transports served (TCP connections, or the one RTU line)."""
-        self.pumps = [p for p in self.pumps if not p.transport.closed]
-        return len(self.pumps)
+        return sum(not pump.transport.closed for pump in self.pumps.values())
 
     def close(self) -> None:
         """Stop listening and close every transport this server serves."""
@@ -137,7 +161,7 @@ class ModbusServer:
         if self._listener is not None:
             self.runner.detach(self._listener)
             self._listener.close()
-        for pump in self.pumps:
+        for pump in list(self.pumps.values()):
             pump.close()
         self.pumps.clear()
 
@@ -147,11 +171,10 @@ def serve_tcp(
 ) -> ModbusServer:
     """Modbus TCP on ``listener``: one session per connection, units = slave numbers."""
     slaves = SlaveSet(devices, link)
-    host, port = listener.address
-    server = ModbusServer(runner, "modbus-tcp", f"tcp://{host}:{port}", slaves, listener=listener)
+    server = ModbusServer(runner, "modbus-tcp", url_of("tcp", listener), slaves, listener=listener)
 
     def on_connect(transport: Transport, now: int) -> None:
-        server.pumps.append(_Pump(runner, transport, TcpSession(slaves)))
+        _Pump(runner, transport, TcpSession(slaves), server.pumps)
 
     runner.attach_listener(listener, on_connect)
     return server
@@ -168,11 +191,12 @@ def serve_rtu(
     """A Modbus RTU line on ``transport`` (pty, serial port or memory)."""
     timing = RtuTiming.from_format(settings)
     if transport.is_real:
-        timing = timing.relaxed(_scaled(runner, REAL_LINE_FLOOR_US), eager=True)
+        floor = _scaled(runner, REAL_LINE_FLOOR_US)
+        timing = timing.relaxed(floor, eager=True, max_lead_us=_max_lead(timing))
     line = RtuLine(devices, link, timing, wiring)
     where = f"pty {transport.peer_path}" if transport.peer_path else transport.name
     server = ModbusServer(runner, "modbus-rtu", where, line.slaves, str(settings))
-    server.pumps.append(_Pump(runner, transport, line))
+    _Pump(runner, transport, line, server.pumps)
     return server
 
 
@@ -187,15 +211,14 @@ def serve_rtu_over_tcp(
     """RTU frames inside TCP connections (a serial-to-Ethernet gateway in front of a line)."""
     devices = tuple(devices)
     slaves = SlaveSet(devices, link)
-    timing = RtuTiming.from_format(settings).relaxed(
-        _scaled(runner, TCP_STREAM_FLOOR_US), eager=True
-    )
-    host, port = listener.address
-    where = f"rtu+tcp://{host}:{port}"
+    timing = RtuTiming.from_format(settings)
+    floor = _scaled(runner, TCP_STREAM_FLOOR_US)
+    timing = timing.relaxed(floor, eager=True, max_lead_us=_max_lead(timing))
+    where = url_of("rtu+tcp", listener)
     server = ModbusServer(runner, "modbus-rtu-over-tcp", where, slaves, str(settings), listener)
 
     def on_connect(transport: Transport, now: int) -> None:
-        server.pumps.append(_Pump(runner, transport, RtuLine(devices, link, timing, wiring)))
+        _Pump(runner, transport, RtuLine(devices, link, timing, wiring), server.pumps)
 
     runner.attach_listener(listener, on_connect)
     return server

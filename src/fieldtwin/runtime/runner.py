@@ -26,6 +26,7 @@ MAX_WAIT_S, so a ``stop()`` from another thread is seen within that time.
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable, Collection
 from contextlib import suppress
 from dataclasses import dataclass
@@ -33,14 +34,27 @@ from dataclasses import dataclass
 from fieldtwin.clock import SimClock
 from fieldtwin.errors import ConfigError, TransportError
 from fieldtwin.runtime.wall import SystemWall, WallClock
-from fieldtwin.transports.base import Flushable, Listener, Transport
+from fieldtwin.transports.base import AcceptFailed, FdTransport, Flushable, Listener, Transport
 
 DataCallback = Callable[[bytes, int], None]
 CloseCallback = Callable[[int], None]
 ConnectCallback = Callable[[Transport, int], None]
+Report = Callable[[str], None]
 
 MAX_WAIT_S = 0.25  # longest single wait: how fast a stop() from another thread is seen
 POLL_WAIT_S = 0.005  # wait cap while output is queued or a real transport has no descriptor
+# Issue 10 item 3: while more than this many answer bytes wait for a peer that does not
+# read, the runner stops reading that connection's requests (a real device answers one
+# request at a time); the kernel's buffers then hold the peer back, not our memory.
+OUTPUT_BOUND = 4096
+# Issue 10 item 1: after a failed accept (no descriptors, no buffers) the listener is
+# left alone this long, doubled on each failure up to the max, then tried again.
+ACCEPT_BACKOFF_S = 0.01
+ACCEPT_BACKOFF_MAX_S = 1.0
+
+
+def _to_stderr(message: str) -> None:
+    print(f"fieldtwin: {message}", file=sys.stderr, flush=True)
 
 
 @dataclass(slots=True)
@@ -48,6 +62,19 @@ class _Link:
     transport: Transport
     on_data: DataCallback
     on_close: CloseCallback | None
+    fd: int | None
+    hooked: bool  # an FdTransport that tells the runner of its backlog and its close
+    paused: bool = False  # reading stopped while its output is over OUTPUT_BOUND
+
+
+@dataclass(slots=True)
+class _Accepting:
+    listener: Listener
+    on_connect: ConnectCallback
+    fd: int
+    backoff: float = ACCEPT_BACKOFF_S
+    retry_at: float | None = None  # wall time to watch the listener again
+    failing: bool = False  # reported, not yet accepting again
 
 
 @dataclass(slots=True)
@@ -69,21 +96,29 @@ class Runner:
     """Runs a SimClock against the wall clock, delivering transport bytes as they arrive."""
 
     def __init__(
-        self, clock: SimClock, speed: float | None = 1.0, *, wall: WallClock | None = None
+        self,
+        clock: SimClock,
+        speed: float | None = 1.0,
+        *,
+        wall: WallClock | None = None,
+        report: Report | None = None,
     ) -> None:
         if speed is not None and not speed > 0:
             raise ConfigError(f"runner speed={speed!r}: allowed a factor > 0, or None (fastest)")
         self.clock = clock
         self.speed = speed
+        self.report: Report = report or _to_stderr
         self._wall: WallClock = wall or SystemWall()
         self._links: dict[int, _Link] = {}  # id(transport) -> link
-        self._listeners: dict[int, tuple[Listener, ConnectCallback]] = {}
-        self._by_fd: dict[int, _Link | tuple[Listener, ConnectCallback]] = {}
-        self._fds: tuple[int, ...] = ()
+        self._listeners: dict[int, _Accepting] = {}  # id(listener) -> entry
+        self._by_fd: dict[int, _Link | _Accepting] = {}
         self._polled: list[_Link] = []  # transports without a descriptor (memory)
-        self._fd_links: list[_Link] = []
-        self._flushers: list[Flushable] = []  # transports that may queue output
-        self._has_real = False
+        self._unhooked: list[_Link] = []  # descriptors of other transports: checked for closing
+        self._flushers: list[Flushable] = []  # other transports that may queue output
+        self._backlog: dict[int, _Link] = {}  # fd -> hooked link with queued output
+        self._closed: list[_Link] = []  # hooked links that closed themselves
+        self._retrying: dict[int, _Accepting] = {}
+        self._real = 0
         self._predicate: Callable[[], bool] | None = None
         self._stopping = False
         self._tick: tuple[CloseCallback | None, int] | None = None
@@ -97,45 +132,96 @@ class Runner:
         """Deliver bytes arriving on ``transport`` as ``on_data(data, now)``."""
         if transport.closed:
             raise TransportError(f"cannot attach {transport.name}: it is closed")
-        self._links[id(transport)] = _Link(transport, on_data, on_close)
-        self._reindex()
+        self.detach(transport)
+        hooked = isinstance(transport, FdTransport)
+        link = _Link(transport, on_data, on_close, transport.fileno(), hooked)
+        self._links[id(transport)] = link
+        self._real += transport.is_real
+        if link.fd is None:
+            self._polled.append(link)
+        else:
+            self._by_fd[link.fd] = link
+            self._wall.watch(link.fd)
+            if not hooked:
+                self._unhooked.append(link)
+        if isinstance(transport, FdTransport):
+            transport.watcher = self
+            if transport.pending_output:
+                self.backlogged(transport)
+        elif isinstance(transport, Flushable):  # a Protocol check: once per attachment
+            self._flushers.append(transport)
 
     def attach_listener(self, listener: Listener, on_connect: ConnectCallback) -> None:
         """Call ``on_connect(transport, now)`` for every accepted connection."""
-        self._listeners[id(listener)] = (listener, on_connect)
-        self._reindex()
+        self.detach(listener)
+        entry = _Accepting(listener, on_connect, listener.fileno())
+        self._listeners[id(listener)] = entry
+        self._by_fd[entry.fd] = entry
+        self._wall.watch(entry.fd)
 
     def detach(self, transport_or_listener: Transport | Listener) -> None:
-        """Stop pumping it (it stays open); unknown objects are ignored."""
+        """Stop pumping it (it stays open); unknown objects are ignored.  O(1) for a
+        descriptor, O(descriptor-less transports) for the others."""
         key = id(transport_or_listener)
-        if self._links.pop(key, None) is not None or self._listeners.pop(key, None) is not None:
-            self._reindex()
+        link = self._links.pop(key, None)
+        if link is not None:
+            self._unindex(link)
+            return
+        entry = self._listeners.pop(key, None)
+        if entry is not None:
+            self._retrying.pop(key, None)
+            self._forget(entry.fd, entry)
 
-    def _reindex(self) -> None:
-        self._by_fd = {}
-        self._polled = []
-        self._fd_links = []
-        for link in self._links.values():
-            fd = link.transport.fileno()
-            if fd is None:
-                self._polled.append(link)
-            else:
-                self._by_fd[fd] = link
-                self._fd_links.append(link)
-        for entry in self._listeners.values():
-            self._by_fd[entry[0].fileno()] = entry
-        self._fds = tuple(self._by_fd)  # a new object: the wall re-registers
-        # isinstance on a Protocol is slow: decide once per attachment, not once per cycle
-        self._flushers = [
-            lk.transport for lk in self._links.values() if isinstance(lk.transport, Flushable)
-        ]
-        real = any(lk.transport.is_real for lk in self._links.values())
-        self._has_real = real or bool(self._listeners)
+    def _unindex(self, link: _Link) -> None:
+        transport = link.transport
+        self._real -= transport.is_real
+        if isinstance(transport, FdTransport) and transport.watcher is self:
+            transport.watcher = None
+        if link.fd is None:
+            self._polled.remove(link)
+        else:
+            self._forget(link.fd, link)
+            if not link.hooked:
+                self._unhooked.remove(link)
+        if not link.hooked and isinstance(transport, Flushable) and transport in self._flushers:
+            self._flushers.remove(transport)
+
+    def _forget(self, fd: int, owner: _Link | _Accepting) -> None:
+        if self._by_fd.get(fd) is owner:
+            del self._by_fd[fd]
+            self._wall.forget(fd)
+        if self._backlog.get(fd) is owner:
+            del self._backlog[fd]
+
+    # -- what an FdTransport tells its watcher (fieldtwin.transports.base.TransportWatcher)
+
+    def backlogged(self, transport: FdTransport) -> None:
+        """Output stays queued: watch for writability; over the bound, stop reading."""
+        link = self._links.get(id(transport))
+        if link is None or link.fd is None:
+            return
+        self._backlog[link.fd] = link
+        if transport.pending_output > OUTPUT_BOUND:
+            link.paused = True
+        self._wall.watch(link.fd, read=not link.paused, write=True)
+
+    def closed(self, transport: FdTransport) -> None:
+        """It is closing: forget its descriptor now (its number may be reused at once)."""
+        link = self._links.get(id(transport))
+        if link is None or link.fd is None:
+            return
+        self._forget(link.fd, link)
+        self._closed.append(link)
 
     @property
     def paced(self) -> bool:
         """True while a real transport or a listener is attached and speed is a number."""
-        return self.speed is not None and self._has_real
+        return self.speed is not None and (self._real > 0 or bool(self._listeners))
+
+    @property
+    def watched(self) -> int:
+        """Descriptors the runner is watching (links and listeners)."""
+        return len(self._by_fd)
 
     # ----------------------------------------------------------------- public runs
 
@@ -203,7 +289,7 @@ class Runner:
         target = deadline if busy else end
         if self.paced:
             self._paced_step(self._soonest(target), end, pace)
-        elif self._fds:
+        elif self._by_fd:
             self._fast_step(target, end, busy)
         elif target is not None:
             self._settle(target)
@@ -233,7 +319,7 @@ class Runner:
         wake = self._soonest(end)
         timeout = MAX_WAIT_S if wake is None else (wake - self.clock.now) / 1_000_000 / speed
         start = self._wall.monotonic()
-        self._wall.wait(self._fds, min(timeout, MAX_WAIT_S))
+        self._handle(self._wall.wait(min(timeout, self._wait_cap())))
         waited = (self._wall.monotonic() - start) * speed
         self._settle(self._clamp(self.clock.now + round(waited * 1_000_000), end))
 
@@ -243,7 +329,7 @@ class Runner:
             timeout = MAX_WAIT_S
         else:
             timeout = min(max(0.0, pace.wall_at(target) - wall.monotonic()), MAX_WAIT_S)
-        ready = wall.wait(self._fds, min(timeout, self._wait_cap()))
+        ready = self._handle(wall.wait(min(timeout, self._wait_cap())))
         reached = self._clamp(pace.sim_at(wall.monotonic()), end)
         if ready:
             if not self._settle(reached):
@@ -254,7 +340,7 @@ class Runner:
     def _fast_step(self, target: int | None, end: int | None, busy: bool) -> None:
         wall = self._wall
         if busy:
-            ready = wall.wait(self._fds, 0)
+            ready = self._handle(wall.wait(0))
             if ready:
                 self._deliver(ready)  # arrived while the clock stood at now
             elif target is not None:
@@ -264,7 +350,7 @@ class Runner:
         start = wall.monotonic()
         wake = self._soonest(target)
         timeout = MAX_WAIT_S if wake is None else (wake - self.clock.now) / 1_000_000
-        ready = wall.wait(self._fds, min(timeout, MAX_WAIT_S, self._wait_cap()))
+        ready = self._handle(wall.wait(min(timeout, MAX_WAIT_S, self._wait_cap())))
         waited = round((wall.monotonic() - start) * 1_000_000)
         reached = self._clamp(self.clock.now + waited, end)
         if not self._settle(reached) and ready:
@@ -276,9 +362,13 @@ class Runner:
         return sim if end is None else min(sim, end)
 
     def _wait_cap(self) -> float:
+        cap = MAX_WAIT_S
+        if self._retrying:
+            soonest = min(e.retry_at or 0.0 for e in self._retrying.values())
+            cap = min(cap, max(0.0, soonest - self._wall.monotonic()))
         if any(lk.transport.is_real for lk in self._polled) or self._output_queued():
-            return POLL_WAIT_S
-        return MAX_WAIT_S
+            cap = min(cap, POLL_WAIT_S)
+        return cap
 
     def _output_queued(self) -> bool:
         return any(transport.pending_output for transport in self._flushers)
@@ -300,32 +390,101 @@ class Runner:
     # ----------------------------------------------------------------- pumping
 
     def _pump(self) -> None:
-        """Poll descriptor-less transports, flush queued output, notice closed transports."""
+        """Poll descriptor-less transports, flush queued output, notice closed transports.
+
+        O(1) in the number of TCP connections: closes and backlogs are told by
+        the transports themselves; only other kinds of transport are scanned.
+        """
         for link in self._polled.copy():
             self._read(link)
-        for link in self._fd_links:
+        while self._closed:
+            link = self._closed.pop()
+            if self._links.get(id(link.transport)) is link:
+                self._gone(link)
+        for link in self._unhooked:
             if link.transport.closed:
                 self._gone(link)
-                return  # the lists were rebuilt; the next cycle sees the rest
+                return  # the list changed; the next cycle sees the rest
         for transport in self._flushers:
             if transport.pending_output:
                 with suppress(TransportError):  # it closed itself: noticed on the next cycle
                     transport.flush()
+        if self._retrying:
+            self._retry_listeners()
+
+    def _handle(self, ready: tuple[Collection[int], Collection[int]]) -> Collection[int]:
+        """Flush the writable descriptors; return the readable ones."""
+        readable, writable = ready
+        for fd in writable:
+            link = self._backlog.get(fd)
+            if link is not None:
+                self._drain(link)
+        return readable
+
+    def _drain(self, link: _Link) -> None:
+        transport = link.transport
+        assert isinstance(transport, FdTransport) and link.fd is not None
+        try:
+            transport.flush()
+        except TransportError:
+            return  # it closed itself: the watcher was told
+        pending = transport.pending_output
+        if pending and not (link.paused and pending <= OUTPUT_BOUND):
+            return
+        link.paused = False
+        if not pending:
+            del self._backlog[link.fd]
+        self._wall.watch(link.fd, read=True, write=bool(pending))
 
     def _deliver(self, ready: Collection[int]) -> None:
         for fd in ready:
             entry = self._by_fd.get(fd)
             if isinstance(entry, _Link):
-                self._read(entry)
+                if not entry.paused:
+                    self._read(entry)
             elif entry is not None:
-                self._accept(*entry)
+                self._accept(entry)
 
-    def _accept(self, listener: Listener, on_connect: ConnectCallback) -> None:
-        while (transport := listener.accept()) is not None:
-            on_connect(transport, self.clock.now)
+    def _accept(self, entry: _Accepting) -> None:
+        accepted = False
+        try:
+            while (transport := entry.listener.accept()) is not None:
+                accepted = True
+                entry.on_connect(transport, self.clock.now)
+        except AcceptFailed as exc:
+            self._back_off(entry, exc)
+            return
+        except TransportError:
+            self.detach(entry.listener)  # closed under us
+            return
+        if accepted and entry.failing:
+            entry.failing = False
+            entry.backoff = ACCEPT_BACKOFF_S
+            self.report(f"{entry.listener.name}: accepting connections again")
+
+    def _back_off(self, entry: _Accepting, exc: AcceptFailed) -> None:
+        """Issue 10 item 1: leave the listener alone a while; report the condition once."""
+        if not entry.failing:
+            entry.failing = True
+            self.report(
+                f"{exc}; the connections already open are still served,"
+                f" new ones are retried (backoff up to {ACCEPT_BACKOFF_MAX_S:g} s)"
+            )
+        self._wall.forget(entry.fd)
+        entry.retry_at = self._wall.monotonic() + entry.backoff
+        entry.backoff = min(entry.backoff * 2, ACCEPT_BACKOFF_MAX_S)
+        self._retrying[id(entry.listener)] = entry
+
+    def _retry_listeners(self) -> None:
+        now = self._wall.monotonic()
+        for key, entry in list(self._retrying.items()):
+            if entry.retry_at is not None and entry.retry_at <= now:
+                del self._retrying[key]
+                entry.retry_at = None
+                self._wall.watch(entry.fd)
 
     def _read(self, link: _Link) -> None:
-        if id(link.transport) not in self._links:
+        if self._links.get(id(link.transport)) is not link:
             return  # detached by an earlier callback of the same delivery
         try:
             data = link.transport.receive()

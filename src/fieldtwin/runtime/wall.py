@@ -1,60 +1,99 @@
 """The wall clock the runner paces against, behind a tiny interface.
 
 The runner never calls ``time`` or ``selectors`` itself: it asks a ``WallClock``
-for the monotonic time and to wait for readable descriptors.  ``SystemWall`` is
+for the monotonic time and to wait for ready descriptors.  ``SystemWall`` is
 the real one; tests inject a fake so the pacing logic is checked without
 sleeping.
+
+Descriptors are registered one at a time (``watch``) and stay registered
+between waits, so a connect or a close costs O(1), never a rebuild of the
+whole set (issue 10 item 2).  A descriptor is watched for reading, for
+writing (while output is queued for it), for both, or forgotten.
 """
 
 from __future__ import annotations
 
 import selectors
 import time
-from collections.abc import Collection, Sequence
+from collections.abc import Collection
 from typing import Protocol
+
+Ready = tuple[Collection[int], Collection[int]]  # (readable fds, writable fds)
 
 
 class WallClock(Protocol):
-    """Monotonic seconds, and a bounded wait for readable descriptors."""
+    """Monotonic seconds, and a bounded wait for ready descriptors."""
 
     def monotonic(self) -> float: ...
 
-    def wait(self, fds: Sequence[int], timeout: float | None) -> Collection[int]:
-        """Block until one of ``fds`` is readable or ``timeout`` seconds pass; the ready fds.
+    def watch(self, fd: int, read: bool = True, write: bool = False) -> None:
+        """Register ``fd`` (or change what it is watched for); neither = ``forget``."""
+        ...
 
-        The runner passes a new ``fds`` object whenever its set of descriptors
-        changes, so an implementation may cache its registrations by identity.
-        """
+    def forget(self, fd: int) -> None:
+        """Stop watching ``fd`` (unknown fds are ignored); call it before the fd is closed."""
+        ...
+
+    def wait(self, timeout: float | None) -> Ready:
+        """Block until a watched fd is ready or ``timeout`` seconds pass."""
         ...
 
 
+_EVENTS = {
+    (True, False): selectors.EVENT_READ,
+    (False, True): selectors.EVENT_WRITE,
+    (True, True): selectors.EVENT_READ | selectors.EVENT_WRITE,
+}
+
+
 class SystemWall:
-    """``time.monotonic`` and a cached ``selectors.DefaultSelector``."""
+    """``time.monotonic`` and one ``selectors.DefaultSelector``, updated incrementally."""
 
     def __init__(self) -> None:
-        self._selector: selectors.BaseSelector | None = None
-        self._fds: Sequence[int] | None = None
+        self._selector: selectors.BaseSelector = selectors.DefaultSelector()
+        self._events: dict[int, int] = {}
 
     def monotonic(self) -> float:
         return time.monotonic()
 
-    def wait(self, fds: Sequence[int], timeout: float | None) -> Collection[int]:
-        if fds is not self._fds or self._selector is None:
-            self._register(fds)
-        assert self._selector is not None
-        return [key.fd for key, _ in self._selector.select(timeout)]
+    def watch(self, fd: int, read: bool = True, write: bool = False) -> None:
+        if not (read or write):
+            self.forget(fd)
+            return
+        events = _EVENTS[(read, write)]
+        old = self._events.get(fd)
+        if old == events:
+            return
+        if old is None:
+            self._selector.register(fd, events)
+        else:
+            self._selector.modify(fd, events)
+        self._events[fd] = events
 
-    def _register(self, fds: Sequence[int]) -> None:
-        # A fresh selector each time the set changes: a closed fd's number may be reused.
-        self.close()
-        selector = selectors.DefaultSelector()
-        for fd in fds:
-            selector.register(fd, selectors.EVENT_READ)
-        self._selector = selector
-        self._fds = fds
+    def forget(self, fd: int) -> None:
+        if self._events.pop(fd, None) is not None:
+            self._selector.unregister(fd)  # an fd closed already: the selector shrugs
+
+    @property
+    def watched(self) -> int:
+        """How many descriptors are registered."""
+        return len(self._events)
+
+    def wait(self, timeout: float | None) -> Ready:
+        if not self._events:
+            # selectors raise on an empty epoll set with no timeout; sleep instead
+            if timeout:
+                time.sleep(timeout)
+            return (), ()
+        readable: list[int] = []
+        writable: list[int] = []
+        for key, mask in self._selector.select(timeout):
+            if mask & selectors.EVENT_READ:
+                readable.append(key.fd)
+            if mask & selectors.EVENT_WRITE:
+                writable.append(key.fd)
+        return readable, writable
 
     def close(self) -> None:
-        if self._selector is not None:
-            self._selector.close()
-        self._selector = None
-        self._fds = None
+        self._selector.close()
+        self._events.clear()

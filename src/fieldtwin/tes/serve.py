@@ -16,6 +16,7 @@ from fieldtwin.runtime.runner import Runner
 from fieldtwin.tes.model import Tes
 from fieldtwin.tes.state import link_key
 from fieldtwin.transports.base import LineSettings
+from fieldtwin.transports.base import line_settings as char_format
 from fieldtwin.transports.pty import open_pty
 from fieldtwin.transports.serial import open_serial
 from fieldtwin.transports.tcp import listen
@@ -27,7 +28,7 @@ def tes_line_settings(tes: Tes, link: Link) -> LineSettings:
     key = link_key(link)
     baud, parity = tes.params[f"{key}.baud"], tes.params[f"{key}.parity"]
     assert isinstance(baud, int) and isinstance(parity, str)
-    return LineSettings(baud=baud, data_bits=8, parity=parity, stop_bits=1)
+    return char_format(baud=baud, data_bits=8, parity=parity, stop_bits=1)
 
 
 def line_settings(endpoint: Endpoint, devices: Sequence[Tes], link: Link) -> LineSettings:
@@ -39,7 +40,8 @@ def line_settings(endpoint: Endpoint, devices: Sequence[Tes], link: Link) -> Lin
             key = link_key(link)
             raise ConfigError(
                 f"{tes.name}: endpoint {endpoint} runs at {settings.baud} Bd parity"
-                f" {settings.parity}, the TES is set to {own.baud} Bd parity {own.parity}"
+                f" {settings.parity.letter}, the TES is set to {own.baud} Bd parity"
+                f" {own.parity.letter}"
                 f" ({key}.baud / {key}.parity; change them with `fieldtwin tesis`)"
             )
     return settings

@@ -4,7 +4,14 @@ Every backend implements the small ``Transport`` interface of ``base``; the
 runner in ``fieldtwin.runtime`` pumps them into the sans-IO device cores.
 """
 
-from fieldtwin.transports.base import Flushable, LineSettings, Listener, Transport
+from fieldtwin.transports.base import (
+    AcceptFailed,
+    Flushable,
+    LineSettings,
+    Listener,
+    Transport,
+    line_settings,
+)
 from fieldtwin.transports.memory import MemoryTransport, memory_pair
 from fieldtwin.transports.pty import PtyTransport, open_pty
 from fieldtwin.transports.serial import SerialTransport, open_serial
@@ -12,6 +19,7 @@ from fieldtwin.transports.tcp import TcpListener, TcpTransport, connect, listen
 from fieldtwin.transports.url import Endpoint, open_endpoint, parse_endpoint
 
 __all__ = [
+    "AcceptFailed",
     "Endpoint",
     "Flushable",
     "LineSettings",
@@ -23,6 +31,7 @@ __all__ = [
     "TcpTransport",
     "Transport",
     "connect",
+    "line_settings",
     "listen",
     "memory_pair",
     "open_endpoint",

@@ -16,7 +16,7 @@ import os
 import termios
 import tty
 
-from fieldtwin.transports.base import READ_CHUNK, FdTransport, LineSettings
+from fieldtwin.transports.base import READ_CHUNK, FdTransport, LineSettings, line_settings
 
 
 def _apply_speed(fd: int, baud: int) -> None:
@@ -37,7 +37,7 @@ class PtyTransport(FdTransport):
         try:
             tty.setraw(master)
             tty.setraw(slave)
-            self.settings = settings or LineSettings()
+            self.settings = settings or line_settings()
             _apply_speed(slave, self.settings.baud)
             os.set_blocking(master, False)
             path = os.ttyname(slave)
@@ -68,11 +68,7 @@ class PtyTransport(FdTransport):
     def fileno(self) -> int | None:
         return None if self.closed else self._master
 
-    def close(self) -> None:
-        if self.closed:
-            return
-        self.closed = True
-        self._out.clear()
+    def _release(self) -> None:
         os.close(self._master)
         os.close(self._slave)
 

@@ -13,10 +13,15 @@ import os
 
 import serial as pyserial
 
+from fieldtwin.charformat import Parity
 from fieldtwin.errors import TransportError
-from fieldtwin.transports.base import READ_CHUNK, FdTransport, LineSettings
+from fieldtwin.transports.base import READ_CHUNK, FdTransport, LineSettings, line_settings
 
-_PARITY = {"N": pyserial.PARITY_NONE, "E": pyserial.PARITY_EVEN, "O": pyserial.PARITY_ODD}
+_PARITY = {
+    Parity.NONE: pyserial.PARITY_NONE,
+    Parity.EVEN: pyserial.PARITY_EVEN,
+    Parity.ODD: pyserial.PARITY_ODD,
+}
 _BYTESIZE = {7: pyserial.SEVENBITS, 8: pyserial.EIGHTBITS}
 _STOPBITS = {1: pyserial.STOPBITS_ONE, 2: pyserial.STOPBITS_TWO}
 
@@ -74,14 +79,10 @@ class SerialTransport(FdTransport):
     def fileno(self) -> int | None:
         return None if self.closed else self._fd
 
-    def close(self) -> None:
-        if self.closed:
-            return
-        self.closed = True
-        self._out.clear()
+    def _release(self) -> None:
         self._port.close()
 
 
 def open_serial(device: str, settings: LineSettings | None = None) -> SerialTransport:
     """Open ``device`` (e.g. /dev/ttyUSB0, or a pty's peer_path) with ``settings``."""
-    return SerialTransport(device, settings or LineSettings())
+    return SerialTransport(device, settings or line_settings())

@@ -1,5 +1,9 @@
 """TCP on loopback (by default): a Listener for slaves, ``connect`` for masters.
 
+A listener holds at most ``max_connections`` open connections (default
+DEFAULT_MAX_CONNECTIONS); a failed accept for want of descriptors or buffers
+raises ``AcceptFailed`` so the runner can back off instead of dying.
+
 Sockets are non-blocking with Nagle off (a Modbus answer leaves at once).
 ``receive`` on a connection whose peer has closed raises TransportError and
 marks the transport closed, after returning whatever arrived before the close.
@@ -7,12 +11,29 @@ marks the transport closed, after returning whatever arrived before the close.
 
 from __future__ import annotations
 
+import errno
 import socket
+import struct
+from collections.abc import Callable
+from contextlib import suppress
 
-from fieldtwin.errors import TransportError
-from fieldtwin.transports.base import READ_CHUNK, FdTransport
+from fieldtwin.errors import ConfigError, TransportError
+from fieldtwin.transports.base import AcceptFailed, FdTransport
 
 CONNECT_TIMEOUT_S = 5.0
+# Open connections per listening endpoint (issue 10 item 1); more are closed at once.
+DEFAULT_MAX_CONNECTIONS = 256
+LISTEN_BACKLOG = 128
+ACCEPT_BATCH = 64  # connections looked at per accept() call, refused ones included
+# Issue 10 item 3, fairness: a read holds at most 2 KiB of requests (170 reads of 12
+# bytes), so one pipelining peer costs one short slice of a cycle, never a long one,
+# and the answers one read can queue stay small (see the runner's OUTPUT_BOUND).
+TCP_READ_CHUNK = 2048
+# The kernel's send buffer of an accepted connection (Linux doubles it): fixed and
+# small, so that a peer that stops reading is noticed after a few dozen KiB of
+# answers, not after megabytes of autotuned buffer.
+SERVER_SEND_BUFFER = 16384
+_EXHAUSTED = frozenset({errno.EMFILE, errno.ENFILE, errno.ENOBUFS, errno.ENOMEM})
 
 
 def _family(host: str) -> socket.AddressFamily:
@@ -24,15 +45,24 @@ def _hostport(address: tuple[str, int] | tuple[str, int, int, int]) -> str:
     return f"[{host}]:{port}" if ":" in host else f"{host}:{port}"
 
 
+def listener_url(scheme: str, address: tuple[str, int] | tuple[str, int, int, int]) -> str:
+    """``scheme://HOST:PORT`` for a bound address, IPv6 in brackets so that it parses
+    back (``tcp://[::]:25951``, not ``tcp://:::25951``)."""
+    return f"{scheme}://{_hostport(address)}"
+
+
 class TcpTransport(FdTransport):
     """One TCP connection."""
 
-    def __init__(self, sock: socket.socket, name: str) -> None:
+    def __init__(
+        self, sock: socket.socket, name: str, on_release: Callable[[], None] | None = None
+    ) -> None:
         super().__init__(name)
         sock.setblocking(False)
         sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         self._sock = sock
         self._fd = sock.fileno()
+        self._on_release = on_release  # the listener's count of live connections
 
     def _write(self, data: bytes) -> int:
         return self._sock.send(data)
@@ -42,7 +72,7 @@ class TcpTransport(FdTransport):
         self._check_open("receive")
         self.flush()
         try:
-            data = self._sock.recv(READ_CHUNK)
+            data = self._sock.recv(TCP_READ_CHUNK)
         except BlockingIOError:
             return b""
         except OSError as exc:
@@ -54,31 +84,44 @@ class TcpTransport(FdTransport):
     def fileno(self) -> int | None:
         return None if self.closed else self._fd
 
-    def close(self) -> None:
-        if self.closed:
-            return
-        self.closed = True
-        self._out.clear()
+    def _release(self) -> None:
         self._sock.close()
+        if self._on_release is not None:
+            self._on_release()
+            self._on_release = None
 
 
 class TcpListener:
-    """A listening socket; ``accept`` is non-blocking."""
+    """A listening socket; ``accept`` is non-blocking.
 
-    def __init__(self, host: str, port: int) -> None:
+    At most ``max_connections`` accepted connections are open at once: one
+    more is accepted and closed at once (counted in ``refused``).  An accept
+    that fails for want of resources raises ``AcceptFailed``; one that fails
+    for the waiting connection's own reasons (it was reset, a network error
+    pending on it) is skipped.
+    """
+
+    def __init__(
+        self, host: str, port: int, max_connections: int = DEFAULT_MAX_CONNECTIONS
+    ) -> None:
+        if isinstance(max_connections, bool) or max_connections < 1:
+            raise ConfigError(f"max_connections={max_connections!r}: allowed a whole number > 0")
         sock = socket.socket(_family(host), socket.SOCK_STREAM)
         try:
             sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
             sock.bind((host, port))
-            sock.listen()
+            sock.listen(LISTEN_BACKLOG)
             sock.setblocking(False)
         except OSError as exc:
             sock.close()
             raise TransportError(f"cannot listen on tcp://{host}:{port}: {exc}") from exc
         bound = sock.getsockname()
         self.address: tuple[str, int] = (str(bound[0]), int(bound[1]))
-        self.name = f"tcp://{_hostport(self.address)}"
+        self.name = listener_url("tcp", self.address)
         self.closed = False
+        self.max_connections = max_connections
+        self.live = 0  # accepted connections still open
+        self.refused = 0  # connections closed at once: the limit was reached
         self._sock = sock
         self._fd = sock.fileno()
 
@@ -86,14 +129,36 @@ class TcpListener:
         return f"<TcpListener {self.name} {'closed' if self.closed else 'listening'}>"
 
     def accept(self) -> TcpTransport | None:
-        """A new connection, or None when nobody is waiting."""
+        """A new connection, or None when nobody (within the limit) is waiting."""
         if self.closed:
             raise TransportError(f"cannot accept on {self.name}: it is closed")
-        try:
-            conn, remote = self._sock.accept()
-        except (BlockingIOError, ConnectionAbortedError):
-            return None
-        return TcpTransport(conn, f"{self.name} <- {_hostport(remote)}")
+        for _ in range(ACCEPT_BATCH):
+            try:
+                conn, remote = self._sock.accept()
+            except BlockingIOError:
+                return None
+            except OSError as exc:
+                if exc.errno in _EXHAUSTED:
+                    raise AcceptFailed(f"{self.name}: cannot accept a connection: {exc}") from exc
+                continue  # accept(2): the waiting connection's own error; take the next
+            if self.live >= self.max_connections:
+                self.refused += 1
+                _close_at_once(conn)
+                continue
+            try:
+                conn.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, SERVER_SEND_BUFFER)
+                transport = TcpTransport(
+                    conn, f"{self.name} <- {_hostport(remote)}", self._released
+                )
+            except OSError:  # reset before we could set it up: take the next
+                conn.close()
+                continue
+            self.live += 1
+            return transport
+        return None  # still readable: the next wait comes back here
+
+    def _released(self) -> None:
+        self.live -= 1
 
     def fileno(self) -> int:
         return self._fd
@@ -104,9 +169,18 @@ class TcpListener:
             self._sock.close()
 
 
-def listen(host: str = "127.0.0.1", port: int = 0) -> TcpListener:
+def _close_at_once(conn: socket.socket) -> None:
+    """Refuse an accepted connection: an RST, not a lingering FIN_WAIT."""
+    with suppress(OSError):
+        conn.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+    conn.close()
+
+
+def listen(
+    host: str = "127.0.0.1", port: int = 0, max_connections: int = DEFAULT_MAX_CONNECTIONS
+) -> TcpListener:
     """Listen on ``host:port``; port 0 picks a free port (see ``.address``)."""
-    return TcpListener(host, port)
+    return TcpListener(host, port, max_connections)
 
 
 def connect(host: str, port: int) -> TcpTransport:

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from urllib.parse import parse_qsl, urlsplit
 
 from fieldtwin.errors import ConfigError
-from fieldtwin.transports.base import LineSettings, Listener, Transport
+from fieldtwin.transports.base import LineSettings, Listener, Transport, line_settings
 from fieldtwin.transports.pty import open_pty
 from fieldtwin.transports.serial import open_serial
 from fieldtwin.transports.tcp import listen
@@ -54,7 +54,8 @@ class Endpoint:
         if self.settings is None:
             return base
         s = self.settings
-        return f"{base}?baud={s.baud}&parity={s.parity}&data={s.data_bits}&stop={s.stop_bits}"
+        query = f"baud={s.baud}&parity={s.parity.letter}&data={s.data_bits}&stop={s.stop_bits}"
+        return f"{base}?{query}"
 
 
 def _bad(url: str, why: str) -> ConfigError:
@@ -62,7 +63,8 @@ def _bad(url: str, why: str) -> ConfigError:
 
 
 def _int(url: str, key: str, text: str) -> int:
-    if not text.isdigit():
+    # str.isdigit() is true for "²" and other digits int() refuses: ASCII only
+    if not (text.isascii() and text.isdigit()):
         raise _bad(url, f"{key}={text!r} is not a whole number")
     return int(text)
 
@@ -78,12 +80,12 @@ def _line_settings(url: str, query: str) -> LineSettings | None:
                 f"endpoint {url!r}: unknown query key {key!r}; allowed keys: {', '.join(LINE_KEYS)}"
             )
         values[key] = value.upper() if key == "parity" else _int(url, key, value)
-    default = LineSettings()
+    default = line_settings()
     try:
-        return LineSettings(
+        return line_settings(
             baud=int(values.get("baud", default.baud)),
             data_bits=int(values.get("data", default.data_bits)),
-            parity=str(values.get("parity", default.parity)),
+            parity=str(values.get("parity", default.parity.letter)),
             stop_bits=int(values.get("stop", default.stop_bits)),
         )
     except ConfigError as exc:
@@ -107,7 +109,7 @@ def _serial(url: str, rest: str) -> Endpoint:
     device, _, query = rest.partition("?")
     if not device.startswith("/") or device == "/":
         raise _bad(url, "a serial endpoint names a device path (serial:///dev/ttyUSB0)")
-    return Endpoint("serial", device=device, settings=_line_settings(url, query) or LineSettings())
+    return Endpoint("serial", device=device, settings=_line_settings(url, query) or line_settings())
 
 
 def parse_endpoint(url: str) -> Endpoint:
@@ -138,7 +140,7 @@ def open_endpoint(endpoint: Endpoint) -> Transport | Listener:
         return open_pty(endpoint.settings)
     if endpoint.scheme == "serial":
         assert endpoint.device is not None
-        return open_serial(endpoint.device, endpoint.settings or LineSettings())
+        return open_serial(endpoint.device, endpoint.settings or line_settings())
     if endpoint.is_tcp:
         assert endpoint.host is not None and endpoint.port is not None
         return listen(endpoint.host, endpoint.port)

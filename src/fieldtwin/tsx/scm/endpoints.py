@@ -136,7 +136,8 @@ class Port:
 def open_real(url: str, line: Line, runner: Any) -> Port:
     """Open a pty, serial device or TCP listener for ``line`` and attach it to ``runner``."""
     from fieldtwin.transports import listen, open_pty, open_serial, parse_endpoint
-    from fieldtwin.transports.base import LineSettings
+    from fieldtwin.transports.base import line_settings
+    from fieldtwin.transports.tcp import listener_url
 
     endpoint = parse_endpoint(url)
     # parse_endpoint gives a serial URL default settings: only a query fixes them
@@ -144,7 +145,7 @@ def open_real(url: str, line: Line, runner: Any) -> Port:
     port = Port(url, line, runner=runner, settings_given=given)
     fmt = line.fmt
     settings = endpoint.settings if given else None
-    settings = settings or LineSettings(fmt.baud, fmt.data_bits, fmt.parity.letter, fmt.stop_bits)
+    settings = settings or line_settings(fmt.baud, fmt.data_bits, fmt.parity.letter, fmt.stop_bits)
     if endpoint.scheme == "pty":
         port.peer = open_pty(settings)
         port.path = port.peer.peer_path
@@ -157,8 +158,7 @@ def open_real(url: str, line: Line, runner: Any) -> Port:
     elif endpoint.scheme == "tcp":
         assert endpoint.host is not None and endpoint.port is not None
         port.listener = listen(endpoint.host, endpoint.port)
-        host, number = port.listener.address[:2]
-        port.path = f"tcp://{host}:{number}"
+        port.path = listener_url("tcp", port.listener.address)
         runner.attach_listener(port.listener, lambda t, now: _connected(port, t))
     else:
         raise ConfigError(
