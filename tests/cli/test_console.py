@@ -258,12 +258,12 @@ def test_tes_verbs_are_the_module_verbs(tmp_path: Path) -> None:
     tes = "tes tcp://127.0.0.1:0 1"
     assert console.execute(f"{tes} input 3 on") == [f"{tes} input 3 = on"]
     assert console.execute(f"{tes} fault short_2 on") == [f"{tes} fault short_2 on"]
-    assert "short_2: input 2: short circuit" in console.execute(f"{tes} faults")
+    assert "short_2: input 2: short circuit (reads 1, §4.1.5)" in console.execute(f"{tes} faults")
     assert console.execute(f"{tes} leds") == ["Pwr=on Run=on Prm=off Wdg=off"]
     assert console.execute("tes pty 1 signal a0 sine offset=5 amplitude=1 period_s=10") == [
         "tes pty 1 signal a0 = sine"
     ]
-    assert console.execute("tes pty 1 fault power on") == ["tes pty 1 fault power on"]
+    assert console.execute("tes pty 1 fault power_off on") == ["tes pty 1 fault power_off on"]
     assert console.execute("tes pty 1 status") == ["TES 1 TES 8EA: off  at pty"]
     status = console.execute("status")
     assert status[-2].startswith("TES 1 TES 32ET-S: on  status H'")
@@ -273,7 +273,7 @@ def test_tes_verbs_are_the_module_verbs(tmp_path: Path) -> None:
     with pytest.raises(ConfigError, match=r"TES 8EA: no analog input 9 \(allowed: 0, 1"):
         console.execute("tes pty 1 input a9 1.0")
     with pytest.raises(
-        ConfigError, match=r"unknown fault 'smoke' for TES 8EA pty 1 \(allowed: power"
+        ConfigError, match=r"unknown fault 'smoke' for TES 8EA pty 1 \(allowed: no_answer"
     ):
         console.execute("tes pty 1 fault smoke on")
     with pytest.raises(ConfigError, match=r"input 3: 'maybe' not allowed \(allowed 1/0, on/off"):

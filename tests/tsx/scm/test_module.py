@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from fieldtwin.errors import ConfigError
+from fieldtwin.devices.scm import ScmDevice
 from fieldtwin.live import mode
 from fieldtwin.tsx.plc import Plc
 from fieldtwin.tsx.scm import MODULE_TYPES, VARIANTS
@@ -216,8 +217,9 @@ def test_1_2_status_shows_no_run_stop_mode() -> None:
     assert plc.read("IW7,0,C") == 1 and mod.active and not mod.running
     status = mod.status()
     assert "mode" not in status and status["activity"] == "executing a request"
-    assert mode(mod) == "operational"
+    device = ScmDevice(mod, plc)
+    assert device.status().mode is None and mode(device.status()) == "operational"
     peer.send(b"12345")
     plc.advance(0.03)
     assert tb.done and mod.status()["activity"] == "awaiting a request"
-    assert mode(mod) == "operational" and "Stop" not in mode(mod)
+    assert mode(device.status()) == "operational" and "Stop" not in mode(device.status())
