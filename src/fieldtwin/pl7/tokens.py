@@ -50,8 +50,8 @@ def tokenize(text: str, source: str = "") -> list[Token]:
     tokens: list[Token] = []
     for number, line in enumerate(text.splitlines(), start=1):
         _tokenize_line(line, number, tokens, source)
-    last = len(text.splitlines()) + 1
-    tokens.append(Token(Kind.END, "", last, 1, True))
+    lines = text.splitlines() or [""]
+    tokens.append(Token(Kind.END, "", len(lines), len(lines[-1]) + 1, True))
     return tokens
 
 

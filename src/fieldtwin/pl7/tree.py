@@ -38,7 +38,7 @@ class Internal:
 
     kind: str
     index: int
-    pos: Pos = field(default=NOWHERE, compare=False)
+    pos: Pos = field(default=NOWHERE, compare=False, repr=False)
 
     @property
     def is_bit(self) -> bool:
@@ -66,7 +66,7 @@ class TxtField:
 
     index: int
     name: str
-    pos: Pos = field(default=NOWHERE, compare=False)
+    pos: Pos = field(default=NOWHERE, compare=False, repr=False)
 
     @property
     def is_bit(self) -> bool:
@@ -79,7 +79,7 @@ class Table:
 
     start: Internal | ModuleObj
     length: int
-    pos: Pos = field(default=NOWHERE, compare=False)
+    pos: Pos = field(default=NOWHERE, compare=False, repr=False)
 
 
 @dataclass(frozen=True, slots=True)
@@ -88,7 +88,7 @@ class Indexed:
 
     base: Internal
     index: Internal
-    pos: Pos = field(default=NOWHERE, compare=False)
+    pos: Pos = field(default=NOWHERE, compare=False, repr=False)
 
 
 # --- expressions -------------------------------------------------------------------
@@ -221,7 +221,7 @@ class TxtOp:
 
     op: str
     index: int
-    pos: Pos = field(default=NOWHERE, compare=False)
+    pos: Pos = field(default=NOWHERE, compare=False, repr=False)
 
 
 @dataclass(frozen=True, slots=True)
@@ -235,13 +235,13 @@ class Step:
 @dataclass(frozen=True, slots=True)
 class Jump:
     label: int
-    pos: Pos = field(default=NOWHERE, compare=False)
+    pos: Pos = field(default=NOWHERE, compare=False, repr=False)
 
 
 @dataclass(frozen=True, slots=True)
 class Call:
     sr: int
-    pos: Pos = field(default=NOWHERE, compare=False)
+    pos: Pos = field(default=NOWHERE, compare=False, repr=False)
 
 
 @dataclass(frozen=True, slots=True)
@@ -281,7 +281,7 @@ class Sentence:
 
     label: int | None
     body: tuple[Statement, ...]
-    pos: Pos = field(default=NOWHERE, compare=False)
+    pos: Pos = field(default=NOWHERE, compare=False, repr=False)
 
 
 # --- sections ----------------------------------------------------------------------
@@ -293,7 +293,7 @@ class Literal:
 
     name: str
     sentences: tuple[Sentence | Comment, ...]
-    pos: Pos = field(default=NOWHERE, compare=False)
+    pos: Pos = field(default=NOWHERE, compare=False, repr=False)
 
 
 MAIN = -1  # the main chart; a macro-step expansion XMj is chart j
@@ -308,7 +308,7 @@ class StepActions:
     step: str
     kind: str
     sentences: tuple[Sentence | Comment, ...]
-    pos: Pos = field(default=NOWHERE, compare=False)
+    pos: Pos = field(default=NOWHERE, compare=False, repr=False)
 
 
 @dataclass(frozen=True, slots=True)
@@ -319,7 +319,7 @@ class Transition:
     source: str
     target: str
     condition: Expr
-    pos: Pos = field(default=NOWHERE, compare=False)
+    pos: Pos = field(default=NOWHERE, compare=False, repr=False)
 
 
 @dataclass(frozen=True, slots=True)
@@ -327,7 +327,7 @@ class Initial:
     """``CHART INITIAL M0``: the initial steps of the main chart."""
 
     steps: tuple[str, ...]
-    pos: Pos = field(default=NOWHERE, compare=False)
+    pos: Pos = field(default=NOWHERE, compare=False, repr=False)
 
 
 ChartItem = StepActions | Transition | Initial | Comment
@@ -336,7 +336,7 @@ ChartItem = StepActions | Transition | Initial | Comment
 @dataclass(frozen=True, slots=True)
 class Chart:
     items: tuple[ChartItem, ...]
-    pos: Pos = field(default=NOWHERE, compare=False)
+    pos: Pos = field(default=NOWHERE, compare=False, repr=False)
 
 
 Section = Literal | Chart
