@@ -50,3 +50,9 @@ def run(text: str, cycles: int = 1, memory: InMemory | None = None) -> tuple[Exe
     for _ in range(cycles):
         executor.run_master_task()
     return executor, memory
+
+
+def load(text: str) -> tuple[Executor, InMemory]:
+    """Load ``text`` (a cold restart: internal bits and words cleared); run nothing."""
+    memory = InMemory()
+    return Executor(parse(text), memory), memory
