@@ -39,7 +39,11 @@ def test_comments_labels_and_eop_aem_5_1() -> None:
     program = parse("<COLD RESTART\n!L1 :RET\n!EOP\n<after\n")
     section = program.sections[0]
     assert isinstance(section, t.Literal)
-    assert section.sentences == (t.Comment("COLD RESTART"), t.Sentence(1, (t.Ret(),)), t.Comment("after"))
+    assert section.sentences == (
+        t.Comment("COLD RESTART"),
+        t.Sentence(1, (t.Ret(),)),
+        t.Comment("after"),
+    )
 
 
 def test_sections_pre_chart_post_and_subroutines() -> None:
@@ -48,7 +52,10 @@ def test_sections_pre_chart_post_and_subroutines() -> None:
 
 
 def test_if_then_else_over_continuation_lines_aem_5_1_l1() -> None:
-    text = "!L1 :IF IW5,0,3 THEN JUMP L2\n    ELSE 0->B1[8];0->OW5,0->OW5,1; RESET TXT0;JUMP L6\n!L2 :RET\n!L6 :RET"
+    text = (
+        "!L1 :IF IW5,0,3 THEN JUMP L2\n"
+        "    ELSE 0->B1[8];0->OW5,0->OW5,1; RESET TXT0;JUMP L6\n!L2 :RET\n!L6 :RET"
+    )
     section = parse(text).sections[0]
     assert isinstance(section, t.Literal)
     first = section.sentences[0]
@@ -123,7 +130,9 @@ def test_indexed_words_and_word_bits_dem_sr0() -> None:
 
 @pytest.mark.parametrize("op", ["=", "<>", "<", ">", "<=", ">="])
 def test_comparisons_in_brackets(op: str) -> None:
-    assert one(f"! [IW5,1{op}0]->B4") == f"Assign(Compare('{op}',ModuleObj(IW5,1),Const(0,DEC)),[B4])"
+    assert (
+        one(f"! [IW5,1{op}0]->B4") == f"Assign(Compare('{op}',ModuleObj(IW5,1),Const(0,DEC)),[B4])"
+    )
 
 
 def test_and_or_not_and_parentheses_aem_5_1() -> None:
@@ -167,7 +176,9 @@ def test_bta_dem_sr0() -> None:
 
 
 def test_objects_of_issue_13() -> None:
-    text = "! B1.SY0.X0.XM0.I14,0.I5,S.IW5,2,D.OW4,1,0.O3,4.W1,0.SW3,F->O3,0;CW3+SW50+IW23,0+OW5,1->W9"
+    text = (
+        "! B1.SY0.X0.XM0.I14,0.I5,S.IW5,2,D.OW4,1,0.O3,4.W1,0.SW3,F->O3,0;CW3+SW50+IW23,0+OW5,1->W9"
+    )
     program = "%CHART\nCHART INITIAL 0\nCHART T: 0>M0\n!  B1\nXM0 T: IN>OUT\n!  B1\n%POST\n" + text
     post = parse(program).section("POST")
     assert isinstance(post, t.Literal)

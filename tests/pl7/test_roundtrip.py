@@ -71,7 +71,9 @@ text_const = st.builds(
     st.one_of(st.just(""), letters),
 )
 constants = st.one_of(
-    st.builds(t.Const, st.integers(0, 0xFFFF), st.sampled_from([t.Radix.DEC, t.Radix.HEX, t.Radix.B])),
+    st.builds(
+        t.Const, st.integers(0, 0xFFFF), st.sampled_from([t.Radix.DEC, t.Radix.HEX, t.Radix.B])
+    ),
     text_const,
 )
 WORD_OPS = [op for op in t.Op if not op.on_bits]
@@ -96,12 +98,26 @@ bits_ = st.recursive(
     max_leaves=6,
 )
 tables = st.one_of(
-    st.builds(lambda i, n: (t.Table(t.Internal("W", i), n), t.Table(t.Internal("W", i + 50), n)), small, st.integers(1, 8)),
-    st.builds(lambda i, n: (t.Table(t.Internal("B", i), n), t.Table(t.Internal("B", i + 50), n)), small, st.integers(1, 8)),
+    st.builds(
+        lambda i, n: (t.Table(t.Internal("W", i), n), t.Table(t.Internal("W", i + 50), n)),
+        small,
+        st.integers(1, 8),
+    ),
+    st.builds(
+        lambda i, n: (t.Table(t.Internal("B", i), n), t.Table(t.Internal("B", i + 50), n)),
+        small,
+        st.integers(1, 8),
+    ),
 )
 actions = st.one_of(
-    st.builds(lambda s, ts: t.Assign(s, tuple(ts)), bits_, st.lists(writable_bits, min_size=1, max_size=3)),
-    st.builds(lambda s, ts: t.Assign(s, tuple(ts)), words_, st.lists(writable_words, min_size=1, max_size=3)),
+    st.builds(
+        lambda s, ts: t.Assign(s, tuple(ts)), bits_, st.lists(writable_bits, min_size=1, max_size=3)
+    ),
+    st.builds(
+        lambda s, ts: t.Assign(s, tuple(ts)),
+        words_,
+        st.lists(writable_words, min_size=1, max_size=3),
+    ),
     tables.map(lambda pair: t.Assign(pair[0], (pair[1],))),
     st.builds(lambda w: t.Assign(w, (t.Table(t.Internal("W", 100), 3),)), words_),
     st.builds(lambda w: t.Assign(t.Bta(w), (t.Table(t.Internal("W", 160), 3),)), words_),
@@ -115,13 +131,15 @@ actions = st.one_of(
 action_lists = st.lists(actions, min_size=1, max_size=3).map(tuple)
 statements = st.one_of(
     action_lists,
-    st.builds(lambda c, a, b: (t.If(c, a, b),), bits_, action_lists, st.one_of(st.none(), action_lists)),
+    st.builds(
+        lambda c, a, b: (t.If(c, a, b),), bits_, action_lists, st.one_of(st.none(), action_lists)
+    ),
     st.builds(lambda c, a: (t.While(c, a),), bits_, action_lists),
     st.just(()),
 )
-comments = st.text(
-    st.characters(min_codepoint=32, max_codepoint=126), max_size=20
-).map(lambda s: t.Comment(s.rstrip()))
+comments = st.text(st.characters(min_codepoint=32, max_codepoint=126), max_size=20).map(
+    lambda s: t.Comment(s.rstrip())
+)
 
 
 @st.composite
@@ -138,12 +156,18 @@ def bodies(draw: st.DrawFn) -> tuple[t.Sentence | t.Comment, ...]:
 
 @st.composite
 def charts(draw: st.DrawFn) -> t.Chart:
-    items: list[t.ChartItem] = [t.Initial(tuple(draw(st.lists(st.sampled_from(["0", "1", "M0"]), min_size=1, max_size=2))))]
+    items: list[t.ChartItem] = [
+        t.Initial(tuple(draw(st.lists(st.sampled_from(["0", "1", "M0"]), min_size=1, max_size=2))))
+    ]
     for _ in range(draw(st.integers(0, 4))):
         chart = draw(st.sampled_from([t.MAIN, 0]))
         steps = ["0", "1", "2", "M0"] if chart == t.MAIN else ["IN", "0", "1", "OUT"]
         if draw(st.booleans()):
-            items.append(t.Transition(chart, draw(st.sampled_from(steps)), draw(st.sampled_from(steps)), draw(bits_)))
+            items.append(
+                t.Transition(
+                    chart, draw(st.sampled_from(steps)), draw(st.sampled_from(steps)), draw(bits_)
+                )
+            )
         else:
             step = draw(st.sampled_from(steps))
             items.append(t.StepActions(chart, step, draw(st.sampled_from("AD")), draw(bodies())))

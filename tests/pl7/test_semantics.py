@@ -16,7 +16,9 @@ def test_set_reset_and_assignment_chains_aem_5_1() -> None:
 
 
 def test_bit_strings_and_tables_aem_5_1_sr2_sr3() -> None:
-    executor, memory = load("! I5,0[4]->O16,0[4]->O16,C[4];I5,8[4]->O16,4[4]\n! SHR 8(IW5,1)->O17,4[8];0->B1[8]")
+    executor, memory = load(
+        "! I5,0[4]->O16,0[4]->O16,C[4];I5,8[4]->O16,4[4]\n! SHR 8(IW5,1)->O17,4[8];0->B1[8]"
+    )
     memory.module(0, 5).i[:12] = [1, 0, 1, 1, 0, 1, 1, 0, 0, 0, 1, 1]
     memory.module(0, 5).iw[1] = 0xA500
     memory.b[1:9] = [1] * 8
@@ -67,8 +69,10 @@ def test_word_bits_and_module_register_bits() -> None:
 
 
 def test_arithmetic_is_on_signed_16_bit_words_and_wraps() -> None:
-    executor, memory = load("! W1/2->W2;W1 REM 2->W3;W1*3->W4;32767+1->W5;0-1->W6;H'F0F0' XOR H'FF00'->W7\n"
-        "! H'FF' AND W1->W8;H'0F' OR H'F0'->W9;SHL 12(W1)->W10;SHR 12(W1)->W11")
+    executor, memory = load(
+        "! W1/2->W2;W1 REM 2->W3;W1*3->W4;32767+1->W5;0-1->W6;H'F0F0' XOR H'FF00'->W7\n"
+        "! H'FF' AND W1->W8;H'0F' OR H'F0'->W9;SHL 12(W1)->W10;SHR 12(W1)->W11"
+    )
     memory.w[1] = 0xFFF9  # -7
     executor.run_master_task()
     m = memory
@@ -77,7 +81,9 @@ def test_arithmetic_is_on_signed_16_bit_words_and_wraps() -> None:
 
 
 def test_comparisons_are_signed() -> None:
-    executor, memory = load("! [W1<W2]->B1;[W1>W2]->B2;[W1<=W1]->B3;[W1>=W2]->B4;[W1=H'FFFF']->B5;[W1<>W2]->B6")
+    executor, memory = load(
+        "! [W1<W2]->B1;[W1>W2]->B2;[W1<=W1]->B3;[W1>=W2]->B4;[W1=H'FFFF']->B5;[W1<>W2]->B6"
+    )
     memory.w[1], memory.w[2] = 0xFFFF, 1  # -1 < 1
     executor.run_master_task()
     m = memory
@@ -107,14 +113,20 @@ def test_not_and_or_with_parentheses_aem_5_1_l5_l6() -> None:
 
 
 def test_text_constants_and_bta_dem_sr0() -> None:
-    executor, memory = load("! M'on'->W181;M'?'->W182\n! BTA(W135)->W160[3];W161 AND H'FF00'->W176;W162->W177\n"
-        "! BTA(W136)->W163[3]")
+    executor, memory = load(
+        "! M'on'->W181;M'?'->W182\n! BTA(W135)->W160[3];W161 AND H'FF00'->W176;W162->W177\n"
+        "! BTA(W136)->W163[3]"
+    )
     memory.w[135] = 123
     memory.w[136] = 0xFFFE
     executor.run_master_task()
     m = memory
     assert m.w[181] == ord("o") | ord("n") << 8 and m.w[182] == ord("?")
-    assert m.w[160:163] == [ord("+") | ord("0") << 8, ord("0") | ord("1") << 8, ord("2") | ord("3") << 8]
+    assert m.w[160:163] == [
+        ord("+") | ord("0") << 8,
+        ord("0") | ord("1") << 8,
+        ord("2") | ord("3") << 8,
+    ]
     assert m.w[176] == ord("1") << 8 and m.w[177] == ord("2") | ord("3") << 8
     assert bytes(b for w in m.w[163:166] for b in (w & 0xFF, w >> 8)) == b"-00002"
 
@@ -133,7 +145,9 @@ def test_rising_and_falling_edges_dem_post() -> None:
 def test_an_edge_keeps_its_memory_when_both_operands_are_evaluated() -> None:
     # no short cut: RE(B11) remembers B11 even in the cycles where RE(I2,B) is true
     memory = InMemory()
-    executor = Executor(parse("! IF NOT (RE(I2,B)+RE(B11)) THEN JUMP L1 ELSE INC W1\n!L1 :"), memory)
+    executor = Executor(
+        parse("! IF NOT (RE(I2,B)+RE(B11)) THEN JUMP L1 ELSE INC W1\n!L1 :"), memory
+    )
     memory.module(0, 2).i[11] = 1
     memory.b[11] = 1
     executor.run_master_task()
