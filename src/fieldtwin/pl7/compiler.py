@@ -1,9 +1,14 @@
-"""Compile a checked tree into closures: the tree is walked once, at load.
+"""Compile a checked tree into Python functions, once, at load.
 
-Each instruction becomes a function returning a control code: NEXT, RET or the
-index of the sentence a JUMP goes to.  Expressions become functions returning 0/1
-(bits), 0..65535 (words), a mask (bit strings) or a list (word tables).
-Arithmetic is on 16-bit signed words and wraps (docs/pl7.md).
+Each sentence becomes one Python function (its source generated here and compiled
+with ``compile``), with the objects bound in: a cell the memory lends
+(``ProgramMemory.cell``: a list and an index) is read and written in place, any
+other object through the reader or writer the memory gives.  A sentence function
+returns a control code: NEXT, RET or the index of the sentence a JUMP goes to.
+The tree is never walked again while the program runs.
+
+Values: 0/1 for bits, 0..65535 for words (arithmetic on signed 16-bit words,
+wrapping), a mask for bit strings (bit 0 first), a list for word tables.
 """
 
 from __future__ import annotations
@@ -14,7 +19,8 @@ from typing import Any, Protocol
 
 from fieldtwin.pl7 import tree as t
 from fieldtwin.pl7.errors import ProgramFault
-from fieldtwin.pl7.memory import ProgramMemory, Reader, Writer
+from fieldtwin.pl7.memory import ProgramMemory, Reader
+from fieldtwin.pl7.printer import format_sentence
 from fieldtwin.pl7.types import BIT, WORD, Type, bits, words
 from fieldtwin.tsx.addressing import ObjectRef
 
@@ -23,8 +29,6 @@ RET = -2
 MAX_WHILE = 10_000  # iterations of one WHILE before a program fault (docs/pl7.md)
 
 Code = Callable[[], int]
-Value = Callable[[], Any]
-Put = Callable[[Any], None]
 
 
 class Runtime(Protocol):
@@ -32,37 +36,75 @@ class Runtime(Protocol):
 
     edges: list[int]
 
-    def step_reader(self, obj: t.Internal) -> Reader: ...
+    def step_cells(self, obj: t.Internal) -> tuple[list[int], tuple[int, ...]]: ...
 
     def call(self, sr: int) -> None: ...
+
+    def fault(self, module: str, line: int, err: ProgramFault) -> None: ...
+
+    def watch(self, module: str) -> set[int]:
+        """The labels of ``module`` with a breakpoint (the set is kept and updated)."""
+        ...
+
+    def hit(self, module: str, label: int) -> None: ...
 
 
 @dataclass(frozen=True, slots=True)
 class Module:
-    """A compiled Literal body: its sentences, their lines and labels."""
+    """A compiled Literal body: chunks of sentences, each starting where a JUMP lands.
+
+    ``code[k]`` runs the sentences of chunk k; a fault in one of them abandons that
+    sentence only (it is recorded with its line) and the chunk goes on.
+    """
 
     name: str
     code: tuple[Code, ...]
-    lines: tuple[int, ...]
-    labels: tuple[int | None, ...]
+    lines: tuple[int, ...]  # the line of each chunk's first sentence
+    labels: tuple[int, ...]  # every label of the body
 
 
 def compile_body(
     name: str, items: tuple[t.Sentence | t.Comment, ...], memory: ProgramMemory, rt: Runtime
 ) -> Module:
     sentences = [s for s in items if isinstance(s, t.Sentence)]
-    targets = {s.label: k for k, s in enumerate(sentences) if s.label is not None}
-    c = _Compiler(memory, rt, targets)
+    landing = {a.label for s in sentences for a in _jumps(s.body)}
+    chunks: list[list[t.Sentence]] = []
+    for sentence in sentences:
+        if not chunks or sentence.label in landing:
+            chunks.append([])
+        chunks[-1].append(sentence)
+    targets = {c[0].label: k for k, c in enumerate(chunks) if c[0].label is not None}
+    gen = _Generator(memory, rt, targets)
+    hooks = (
+        gen.bind(lambda line, err: rt.fault(name, line, err)),
+        gen.bind(rt.watch(name)),
+        gen.bind(lambda label: rt.hit(name, label)),
+    )
     return Module(
         name,
-        tuple(c.sentence(s) for s in sentences),
-        tuple(s.pos.line for s in sentences),
-        tuple(s.label for s in sentences),
+        tuple(gen.chunk(c, hooks) for c in chunks),
+        tuple(c[0].pos.line for c in chunks),
+        tuple(s.label for s in sentences if s.label is not None),
     )
 
 
+def _jumps(body: tuple[t.Statement, ...]) -> list[t.Jump]:
+    out: list[t.Jump] = []
+    for statement in body:
+        if isinstance(statement, t.If):
+            actions = statement.then + (statement.otherwise or ())
+        elif isinstance(statement, t.While):
+            actions = statement.body
+        else:
+            actions = (statement,)
+        out.extend(a for a in actions if isinstance(a, t.Jump))
+    return out
+
+
 def compile_condition(node: t.Expr, memory: ProgramMemory, rt: Runtime) -> Reader:
-    return _Compiler(memory, rt, {}).value(node)
+    gen = _Generator(memory, rt, {})
+    code = gen.function(["return " + gen.expr(node)], "condition")
+    return code
 
 
 def type_of(node: t.Expr) -> Type:
@@ -89,300 +131,265 @@ def _signed(v: int) -> int:
     return v - 0x10000 if v & 0x8000 else v
 
 
-class _Compiler:
+def _div(a: int, b: int) -> int:
+    x, y = _signed(a), _signed(b)
+    if y == 0:
+        raise ProgramFault("division by zero")
+    q = abs(x) // abs(y)
+    return (q if (x < 0) == (y < 0) else -q) & 0xFFFF  # towards zero
+
+
+def _rem(a: int, b: int) -> int:
+    x, y = _signed(a), _signed(b)
+    if y == 0:
+        raise ProgramFault("REM by zero")
+    q = abs(x) // abs(y)
+    q = q if (x < 0) == (y < 0) else -q
+    return (x - q * y) & 0xFFFF  # the sign of the dividend
+
+
+def _bta(value: int) -> list[int]:
+    # BTA: a signed word in 6 ASCII characters, the sign then 5 digits, the first
+    # character in the low byte of the first word (DEM 5.3-4 SR0 uses W162 for the
+    # last two digits and the high byte of W161 for the hundreds): manual-notes.md
+    v = _signed(value)
+    raw = (("-" if v < 0 else "+") + f"{abs(v):05d}").encode("ascii")
+    return [raw[k] | (raw[k + 1] << 8) for k in range(0, 6, 2)]
+
+
+def _while_fault() -> ProgramFault:
+    return ProgramFault(f"WHILE did not end within {MAX_WHILE} iterations")
+
+
+_BASE: dict[str, Any] = {
+    "_div": _div,
+    "_rem": _rem,
+    "_bta": _bta,
+    "_while_fault": _while_fault,
+    "MAX_WHILE": MAX_WHILE,
+    "_PF": ProgramFault,
+}
+_WORD_OPS = {
+    t.Op.WAND: "({a} & {b})",
+    t.Op.WOR: "({a} | {b})",
+    t.Op.WXOR: "({a} ^ {b})",
+    t.Op.ADD: "(({a} + {b}) & 65535)",
+    t.Op.SUB: "(({a} - {b}) & 65535)",
+    t.Op.MUL: "((({a} ^ 32768) - 32768) * (({b} ^ 32768) - 32768) & 65535)",
+    t.Op.DIV: "_div({a}, {b})",
+    t.Op.REM: "_rem({a}, {b})",
+    t.Op.AND: "({a} & {b})",  # no short cut: every RE/FE keeps its memory
+    t.Op.OR: "({a} | {b})",
+}
+# signed order is the unsigned order of the words with their sign bit flipped
+_COMPARE = {
+    "=": "(1 if {a} == {b} else 0)",
+    "<>": "(1 if {a} != {b} else 0)",
+    "<": "(1 if ({a} ^ 32768) < ({b} ^ 32768) else 0)",
+    ">": "(1 if ({a} ^ 32768) > ({b} ^ 32768) else 0)",
+    "<=": "(1 if ({a} ^ 32768) <= ({b} ^ 32768) else 0)",
+    ">=": "(1 if ({a} ^ 32768) >= ({b} ^ 32768) else 0)",
+}
+
+
+class _Generator:
     def __init__(self, memory: ProgramMemory, rt: Runtime, labels: dict[int, int]) -> None:
         self.m = memory
         self.rt = rt
         self.labels = labels
+        self.env: dict[str, Any] = dict(_BASE)
+        self.names: dict[int, str] = {}
+        self.temps = 0
+
+    def bind(self, value: object) -> str:
+        name = self.names.get(id(value))
+        if name is None:
+            name = f"_o{len(self.env)}"
+            self.env[name] = value
+            self.names[id(value)] = name
+        return name
+
+    def temp(self) -> str:
+        self.temps += 1
+        return f"_v{self.temps}"
+
+    def function(self, body: list[str], title: str) -> Code:
+        source = "def _f():\n" + "".join(f"    {line}\n" for line in body)
+        namespace: dict[str, Any] = {}
+        exec(compile(source, f"<pl7 {title}>", "exec"), self.env, namespace)
+        code: Code = namespace["_f"]
+        return code
 
     # --- statements -------------------------------------------------------------------
 
-    def sentence(self, sentence: t.Sentence) -> Code:
-        return _sequence([self.statement(s) for s in sentence.body])
+    def chunk(self, sentences: list[t.Sentence], hooks: tuple[str, str, str]) -> Code:
+        fault, watch, hit = hooks
+        lines: list[str] = []
+        for sentence in sentences:
+            if sentence.label is not None:
+                lines += [f"if {watch} and {sentence.label} in {watch}:"]
+                lines += [f"    {hit}({sentence.label})"]
+            body: list[str] = []
+            for statement in sentence.body:
+                body.extend(self.statement(statement))
+            lines += ["try:", *_indent(body), "except _PF as _e:"]
+            lines += [f"    {fault}({sentence.pos.line}, _e)"]
+        lines.append(f"return {NEXT}")
+        return self.function(lines, format_sentence(sentences[0])[:60])
 
-    def statement(self, node: t.Statement) -> Code:
+    def statement(self, node: t.Statement) -> list[str]:
         if isinstance(node, t.If):
-            return self.if_(node)
+            out = [f"if {self.expr(node.condition)}:"]
+            out += _indent(self.actions(node.then))
+            if node.otherwise is not None:
+                out += ["else:", *_indent(self.actions(node.otherwise))]
+            return out
         if isinstance(node, t.While):
-            return self.while_(node)
+            count = self.temp()
+            body = [f"{count} += 1", f"if {count} > MAX_WHILE:", "    raise _while_fault()"]
+            body += self.actions(node.body)
+            return [f"{count} = 0", f"while {self.expr(node.condition)}:", *_indent(body)]
         return self.action(node)
 
-    def if_(self, node: t.If) -> Code:
-        cond = self.value(node.condition)
-        then = _sequence([self.action(a) for a in node.then])
-        if node.otherwise is None:
-            return lambda: then() if cond() else NEXT
-        otherwise = _sequence([self.action(a) for a in node.otherwise])
-        return lambda: then() if cond() else otherwise()
+    def actions(self, actions: tuple[t.Action, ...]) -> list[str]:
+        out: list[str] = []
+        for action in actions:
+            out.extend(self.action(action))
+        return out
 
-    def while_(self, node: t.While) -> Code:
-        cond = self.value(node.condition)
-        body = _sequence([self.action(a) for a in node.body])
-
-        def run() -> int:
-            count = 0
-            while cond():
-                count += 1
-                if count > MAX_WHILE:
-                    raise ProgramFault(f"WHILE did not end within {MAX_WHILE} iterations")
-                code = body()
-                if code != NEXT:
-                    return code
-            return NEXT
-
-        return run
-
-    def action(self, node: t.Action) -> Code:
+    def action(self, node: t.Action) -> list[str]:
         if isinstance(node, t.Assign):
-            return self.assign(node)
+            value = self.temp()
+            out = [f"{value} = {self.expr(node.source)}"]
+            source_type = type_of(node.source)
+            for target in node.targets:
+                out.extend(self.store(target, value, source_type))
+            return out
         if isinstance(node, t.SetBit):
-            write = self.writer(node.target, BIT)
-            value = 1 if node.value else 0
-            return lambda: (write(value), NEXT)[1]
+            return self.store(node.target, "1" if node.value else "0", BIT)
         if isinstance(node, t.Step):
-            read, put = self.value(node.target), self.writer(node.target, WORD)
-            delta = 1 if node.up else 0xFFFF
-            return lambda: (put((read() + delta) & 0xFFFF), NEXT)[1]
+            delta = "1" if node.up else "65535"
+            value = self.temp()
+            read = self.expr(node.target)
+            return [f"{value} = ({read} + {delta}) & 65535", *self.store(node.target, value, WORD)]
         if isinstance(node, t.TxtOp):
-            return self.txt_op(node)
+            if node.op == "RESET":
+                return [f"{self.bind(self.m.txt_reset)}({node.index})"]
+            return [f"{self.bind(self.m.txt_start)}({node.index}, {node.op!r})"]
         if isinstance(node, t.Jump):
-            target = self.labels[node.label]
-            return lambda: target
+            return [f"return {self.labels[node.label]}"]
         if isinstance(node, t.Call):
-            call, sr = self.rt.call, node.sr
-            return lambda: (call(sr), NEXT)[1]
-        return lambda: RET
+            return [f"{self.bind(self.rt.call)}({node.sr})"]
+        return [f"return {RET}"]
 
-    def txt_op(self, node: t.TxtOp) -> Code:
-        index, m, command = node.index, self.m, node.op
-        if command == "RESET":
-
-            def reset() -> int:
-                m.txt_reset(index)
-                return NEXT
-
-            return reset
-
-        def start() -> int:
-            m.txt_start(index, command)
-            return NEXT
-
-        return start
-
-    def assign(self, node: t.Assign) -> Code:
-        source_type = type_of(node.source)
-        value = self.value(node.source)
-        puts = [self.writer(target, source_type) for target in node.targets]
-        if len(puts) == 1:
-            put = puts[0]
-            return lambda: (put(value()), NEXT)[1]
-
-        def run() -> int:
-            v = value()
-            for p in puts:
-                p(v)
-            return NEXT
-
-        return run
-
-    # --- writers ----------------------------------------------------------------------
-
-    def writer(self, target: t.Expr, source: Type) -> Put:
-        """A function that stores a value of type ``source`` into ``target``."""
+    def store(self, target: t.Expr, value: str, source: Type) -> list[str]:
+        """Lines that store ``value`` (of type ``source``) into ``target``."""
         if isinstance(target, t.Table):
-            return self.table_writer(target, source)
+            return self.store_table(target, value, source)
         if isinstance(target, t.Indexed):
-            write_at = self.m.indexed_writer(target.base)
-            offset = self.m.word_reader(target.index)
-            return lambda v: write_at(offset(), v)
+            write_at = self.bind(self.m.indexed_writer(target.base))
+            return [f"{write_at}({self.expr(target.index)}, {value})"]
         assert isinstance(target, t.Internal | t.InternalBit | t.ModuleObj | t.TxtField)
+        cell = self.m.cell(target)
+        if cell is not None:
+            table, index, bit = cell
+            ref = f"{self.bind(table)}[{index}]"
+            if bit is None:
+                return [f"{ref} = {value}"]
+            mask = 1 << bit
+            return [f"{ref} = ({ref} | {mask}) if {value} else ({ref} & {0xFFFF ^ mask})"]
         if type_of(target) == BIT:
-            return self.m.bit_writer(target)
+            return [f"{self.bind(self.m.bit_writer(target))}({value})"]
         assert not isinstance(target, t.InternalBit)
-        return self.m.word_writer(target)  # a bit string goes in as its mask, bit 0 first
+        return [f"{self.bind(self.m.word_writer(target))}({value})"]
 
-    def table_writer(self, target: t.Table, source: Type) -> Put:
-        elements = self.elements(target)
-        if type_of(target).kind == "bits":
-            bit_writers: list[Writer] = [self.m.bit_writer(e) for e in elements]
-
-            def put_bits(v: int) -> None:
-                for k, w in enumerate(bit_writers):
-                    w((v >> k) & 1)
-
-            return put_bits
-        word_writers: list[Writer] = [self.m.word_writer(e) for e in elements]
-        if source == WORD:
-
-            def fill(v: int) -> None:
-                for w in word_writers:
-                    w(v)
-
-            return fill
-
-        def copy(values: list[int]) -> None:
-            for w, v in zip(word_writers, values, strict=True):
-                w(v)
-
-        return copy
-
-    def elements(self, table: t.Table) -> list[t.Internal | t.ModuleObj]:
-        start = table.start
-        if isinstance(start, t.Internal):
-            return [t.Internal(start.kind, start.index + k) for k in range(table.length)]
-        ref = start.ref
-        base = ref.index or 0
-        return [
-            t.ModuleObj(ObjectRef(ref.kind, ref.rack, ref.slot, base + k))
-            for k in range(table.length)
-        ]
+    def store_table(self, target: t.Table, value: str, source: Type) -> list[str]:
+        elements = _elements(target)
+        out: list[str] = []
+        for k, element in enumerate(elements):
+            if type_of(target).kind == "bits":
+                part = f"(({value} >> {k}) & 1)"
+            elif source == WORD:
+                part = value
+            else:
+                part = f"{value}[{k}]"
+            out.extend(self.store(element, part, BIT if type_of(element) == BIT else WORD))
+        return out
 
     # --- expressions --------------------------------------------------------------------
 
-    def value(self, node: t.Expr) -> Value:
+    def expr(self, node: t.Expr) -> str:
         if isinstance(node, t.Const):
-            constant = node.value
-            return lambda: constant
-        if isinstance(node, t.Internal):
-            if node.kind in ("X", "XM"):
-                return self.rt.step_reader(node)
-            return self.m.bit_reader(node) if node.is_bit else self.m.word_reader(node)
-        if isinstance(node, t.InternalBit):
-            return self.m.bit_reader(node)
-        if isinstance(node, t.ModuleObj | t.TxtField):
-            return self.m.bit_reader(node) if type_of(node) == BIT else self.m.word_reader(node)
+            return str(node.value)
+        if isinstance(node, t.Internal) and node.kind in ("X", "XM"):
+            active, steps = self.rt.step_cells(node)
+            cells = [f"{self.bind(active)}[{k}]" for k in steps]
+            return "(" + " | ".join(cells) + ")" if len(cells) > 1 else cells[0]
+        if isinstance(node, t.Internal | t.InternalBit | t.ModuleObj | t.TxtField):
+            return self.read(node)
         if isinstance(node, t.Table):
-            return self.table_value(node)
+            parts = [self.expr(e) for e in _elements(node)]
+            if type_of(node).kind == "bits":
+                return "(" + " | ".join(f"({p} << {k})" for k, p in enumerate(parts)) + ")"
+            return "[" + ", ".join(parts) + "]"
         if isinstance(node, t.Indexed):
-            read_at, offset = self.m.indexed_reader(node.base), self.m.word_reader(node.index)
-            return lambda: read_at(offset())
+            read_at = self.bind(self.m.indexed_reader(node.base))
+            return f"{read_at}({self.expr(node.index)})"
         if isinstance(node, t.Not):
-            operand = self.value(node.operand)
-            return lambda: 1 - operand()
+            return f"({self.expr(node.operand)} ^ 1)"
         if isinstance(node, t.Edge):
             return self.edge(node)
         if isinstance(node, t.Compare):
-            return self.compare(node)
+            return _COMPARE[node.op].format(a=self.expr(node.left), b=self.expr(node.right))
         if isinstance(node, t.Shift):
-            operand, n = self.value(node.operand), node.count
+            operand = self.expr(node.operand)
             if node.left:
-                return lambda: (operand() << n) & 0xFFFF
-            return lambda: operand() >> n
+                return f"(({operand} << {node.count}) & 65535)"
+            return f"({operand} >> {node.count})"
         if isinstance(node, t.Bta):
-            return _bta(self.value(node.operand))
+            return f"_bta({self.expr(node.operand)})"
         assert isinstance(node, t.Binary)
-        return self.binary(node)
+        return _WORD_OPS[node.op].format(a=self.expr(node.left), b=self.expr(node.right))
 
-    def table_value(self, node: t.Table) -> Value:
-        elements = self.elements(node)
-        if type_of(node).kind == "bits":
-            readers = [self.m.bit_reader(e) for e in elements]
+    def read(self, node: t.Internal | t.InternalBit | t.ModuleObj | t.TxtField) -> str:
+        cell = self.m.cell(node)
+        if cell is not None:
+            table, index, bit = cell
+            ref = f"{self.bind(table)}[{index}]"
+            return ref if bit is None else f"(({ref} >> {bit}) & 1)"
+        if type_of(node) == BIT:
+            return f"{self.bind(self.m.bit_reader(node))}()"
+        assert not isinstance(node, t.InternalBit)
+        return f"{self.bind(self.m.word_reader(node))}()"
 
-            def mask() -> int:
-                v = 0
-                for k, r in enumerate(readers):
-                    v |= r() << k
-                return v
-
-            return mask
-        word_readers = [self.m.word_reader(e) for e in elements]
-        return lambda: [r() for r in word_readers]
-
-    def edge(self, node: t.Edge) -> Value:
+    def edge(self, node: t.Edge) -> str:
         # RE/FE: each occurrence compares its bit with the value it had when this
         # occurrence was last evaluated (0 after a cold restart): docs/pl7.md
-        read, edges = self.value(node.operand), self.rt.edges
+        edges = self.rt.edges
         k = len(edges)
         edges.append(0)
-        if node.rising:
+        read = self.function(["return " + self.expr(node.operand)], "edge")
+        rising = node.rising
 
-            def rising() -> int:
-                v = read()
-                before = edges[k]
-                edges[k] = v
-                return 1 if v and not before else 0
-
-            return rising
-
-        def falling() -> int:
+        def detect() -> int:
             v = read()
             before = edges[k]
             edges[k] = v
-            return 1 if before and not v else 0
+            return 1 if (v and not before if rising else before and not v) else 0
 
-        return falling
-
-    def compare(self, node: t.Compare) -> Value:
-        a, b = self.value(node.left), self.value(node.right)
-        op = node.op
-        if op == "=":
-            return lambda: 1 if a() == b() else 0
-        if op == "<>":
-            return lambda: 1 if a() != b() else 0
-        s = _signed
-        if op == "<":
-            return lambda: 1 if s(a()) < s(b()) else 0
-        if op == ">":
-            return lambda: 1 if s(a()) > s(b()) else 0
-        if op == "<=":
-            return lambda: 1 if s(a()) <= s(b()) else 0
-        return lambda: 1 if s(a()) >= s(b()) else 0
-
-    def binary(self, node: t.Binary) -> Value:
-        a, b = self.value(node.left), self.value(node.right)
-        op = node.op
-        # no short cut: both operands are evaluated, so that every RE/FE keeps its memory
-        simple: dict[t.Op, Value] = {
-            t.Op.AND: lambda: a() & b(),
-            t.Op.OR: lambda: a() | b(),
-            t.Op.WAND: lambda: a() & b(),
-            t.Op.WOR: lambda: a() | b(),
-            t.Op.WXOR: lambda: a() ^ b(),
-            t.Op.ADD: lambda: (a() + b()) & 0xFFFF,
-            t.Op.SUB: lambda: (a() - b()) & 0xFFFF,
-            t.Op.MUL: lambda: (_signed(a()) * _signed(b())) & 0xFFFF,
-        }
-        if op in simple:
-            return simple[op]
-        return _division(a, b, op is t.Op.REM)
+        return f"{self.bind(detect)}()"
 
 
-def _division(a: Value, b: Value, remainder: bool) -> Value:
-    def divide() -> int:
-        x, y = _signed(a()), _signed(b())
-        if y == 0:
-            raise ProgramFault("division by zero" if not remainder else "REM by zero")
-        q = abs(x) // abs(y) * (1 if (x < 0) == (y < 0) else -1)  # towards zero
-        return ((x - q * y) if remainder else q) & 0xFFFF
-
-    return divide
+def _indent(lines: list[str]) -> list[str]:
+    return [f"    {line}" for line in lines] or ["    pass"]
 
 
-def _bta(operand: Value) -> Value:
-    # BTA: a signed word in 6 ASCII characters, the sign then 5 digits, the first
-    # character in the low byte of the first word (DEM 5.3-4 SR0 uses W162 for the
-    # last two digits and the high byte of W161 for the hundreds): docs/manual-notes.md
-    def convert() -> list[int]:
-        v = _signed(operand())
-        text = ("-" if v < 0 else "+") + f"{abs(v):05d}"
-        raw = text.encode("ascii")
-        return [raw[k] | (raw[k + 1] << 8) for k in range(0, 6, 2)]
-
-    return convert
-
-
-def _sequence(codes: list[Code]) -> Code:
-    if len(codes) == 1:
-        return codes[0]
-    if not codes:
-        return lambda: NEXT
-    frozen = tuple(codes)
-
-    def run() -> int:
-        for code in frozen:
-            r = code()
-            if r != NEXT:
-                return r
-        return NEXT
-
-    return run
+def _elements(table: t.Table) -> list[t.Internal | t.ModuleObj]:
+    start = table.start
+    if isinstance(start, t.Internal):
+        return [t.Internal(start.kind, start.index + k) for k in range(table.length)]
+    ref = start.ref
+    base = ref.index or 0
+    return [
+        t.ModuleObj(ObjectRef(ref.kind, ref.rack, ref.slot, base + k)) for k in range(table.length)
+    ]

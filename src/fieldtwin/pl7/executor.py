@@ -27,7 +27,7 @@ from fieldtwin.pl7.checker import DEFAULT_LIMITS, Limits, check
 from fieldtwin.pl7.compiler import NEXT, RET, Module, compile_body, compile_condition
 from fieldtwin.pl7.errors import Pl7Error, ProgramFault
 from fieldtwin.pl7.grafcet import ChartLayout, Grafcet
-from fieldtwin.pl7.memory import ProgramMemory, Reader
+from fieldtwin.pl7.memory import ProgramMemory
 from fieldtwin.pl7.parser import parse
 
 COLD_RESTART_BIT = 0  # SY0 (AEM 5.1)
@@ -139,14 +139,12 @@ class Executor:
 
     # --- Runtime (for the compiled code) ---------------------------------------------
 
-    def step_reader(self, obj: t.Internal) -> Reader:
+    def step_cells(self, obj: t.Internal) -> tuple[list[int], tuple[int, ...]]:
+        """Xi: the activity of step i; XMj: of every step of the expansion XMj."""
         assert self.layout is not None and self.grafcet is not None
-        active = self.grafcet.active
         if obj.kind == "X":
-            k = self.layout.index[(t.MAIN, str(obj.index))]
-            return lambda: active[k]
-        steps = tuple(self.layout.macro_steps(obj.index))
-        return lambda: 1 if any(active[k] for k in steps) else 0
+            return self.grafcet.active, (self.layout.index[(t.MAIN, str(obj.index))],)
+        return self.grafcet.active, tuple(self.layout.macro_steps(obj.index))
 
     def call(self, sr: int) -> None:
         if self._depth >= MAX_CALL_DEPTH:
@@ -159,16 +157,9 @@ class Executor:
 
     def run_module(self, module: Module) -> None:
         code, n = module.code, len(module.code)
-        watch = self._label_breaks.get(module.name)
         i = jumps = 0
         while i < n:
-            if watch is not None and i in watch:
-                self._hit(Hit(self.cycles, module.name, module.labels[i]))
-            try:
-                r = code[i]()
-            except ProgramFault as err:
-                self.fault(module.name, module.lines[i], err)
-                r = NEXT
+            r = code[i]()  # faults are caught, sentence by sentence, inside the chunk
             if r == NEXT:
                 i += 1
             elif r == RET:
@@ -181,6 +172,12 @@ class Executor:
                         self.fault(module.name, module.lines[i], ProgramFault(message))
                         return
                 i = r
+
+    def watch(self, module: str) -> set[int]:
+        return self._label_breaks.setdefault(module, set())
+
+    def hit(self, module: str, label: int) -> None:
+        self._hit(Hit(self.cycles, module, label))
 
     def fault(self, module: str, line: int, err: ProgramFault) -> None:
         self.faults.append(FaultRecord(module, line, self.cycles, str(err)))
@@ -248,7 +245,7 @@ class Executor:
         compiled = self.modules.get(module)
         if compiled is None or label not in compiled.labels:
             raise Pl7Error(0, 0, f"{module} L{label}", "a label of a Literal section")
-        self._label_breaks.setdefault(module, set()).add(compiled.labels.index(label))
+        self.watch(module).add(label)
 
     def break_at_step(self, step: str) -> None:
         if self.layout is None:
@@ -259,7 +256,8 @@ class Executor:
         self._step_breaks.add(names[step])
 
     def clear_breakpoints(self) -> None:
-        self._label_breaks.clear()
+        for labels in self._label_breaks.values():
+            labels.clear()  # the compiled chunks keep these sets
         self._step_breaks.clear()
 
     def _hit(self, hit: Hit) -> None:

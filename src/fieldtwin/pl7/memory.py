@@ -26,6 +26,9 @@ IndexedReader = Callable[[int], int]
 IndexedWriter = Callable[[int, int], None]
 BitObject = t.Internal | t.InternalBit | t.ModuleObj | t.TxtField
 WordObject = t.Internal | t.ModuleObj | t.TxtField
+# (list, index, bit): the object is list[index] (bit None: a 0/1 bit or a word) or bit
+# ``bit`` of the word list[index]; the compiled program reads and writes it in place.
+Cell = tuple[list[int], int, int | None]
 
 TXT_COMMANDS = ("EXCHG", "INPUT", "OUTPUT")  # SCM 2.2: EXCHG (S, I, O), OUTPUT (S, O)
 ERR_CANCELLED = 1  # TXTi,S = 1: "exchange in progress was cancelled by reset" (SCM 4.5)
@@ -33,6 +36,11 @@ ERR_CANCELLED = 1  # TXTi,S = 1: "exchange in progress was cancelled by reset" (
 
 class ProgramMemory(Protocol):
     """The objects of a PLC as a program sees them."""
+
+    def cell(self, obj: BitObject | WordObject) -> Cell | None:
+        """Where the object lives, if it is a plain list element (the fast way); else None
+        and the compiled program goes through the readers and writers."""
+        ...
 
     def bit_reader(self, obj: BitObject) -> Reader: ...
 
@@ -134,6 +142,21 @@ class InMemory:
 
     def _table(self, kind: str) -> list[int]:
         return {"B": self.b, "W": self.w, "CW": self.cw, "SY": self.sy, "SW": self.sw}[kind]
+
+    def cell(self, obj: BitObject | WordObject) -> Cell | None:
+        if isinstance(obj, t.Internal):
+            return self._table(obj.kind), obj.index, None
+        if isinstance(obj, t.InternalBit):
+            return self._table(obj.word.kind), obj.word.index, obj.bit
+        if isinstance(obj, t.TxtField):
+            return None
+        ref = obj.ref
+        image = self.module(ref.rack, ref.slot)
+        if ref.kind is ObjectKind.FAULT:
+            return image.fault, 0, None
+        if ref.kind in (ObjectKind.I, ObjectKind.O):
+            return (image.i if ref.kind is ObjectKind.I else image.o), ref.index or 0, None
+        return self._module_word_list(ref), ref.index or 0, ref.bit
 
     def bit_reader(self, obj: BitObject) -> Reader:
         if isinstance(obj, t.Internal):
