@@ -53,3 +53,24 @@ def test_the_package_is_sans_io() -> None:
         text = path.read_text()
         for name in ("asyncio", "socket", "serial", "time", "datetime", "selectors"):
             assert f"import {name}\n" not in text and f"from {name} " not in text, path
+
+
+def test_a_cold_restart_clears_the_fault_bit() -> None:
+    executor, m = load("! 1/W1->W2")
+    executor.run_master_task()
+    assert m.sy[18] == 1 and len(executor.faults) == 1
+    executor.cold_restart()
+    assert m.sy[18] == 0 and not executor.faults
+
+
+def test_the_python_block_of_docs_pl7_runs(monkeypatch: pytest.MonkeyPatch) -> None:
+    import re
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    page = (root / "docs" / "pl7.md").read_text()
+    blocks = re.findall(r"^```python\n(.*?)^```", page, re.S | re.M)
+    assert blocks
+    monkeypatch.chdir(root)
+    for block in blocks:
+        exec(compile(block, "docs/pl7.md", "exec"), {})

@@ -192,6 +192,7 @@ class Executor:
         if self.grafcet is not None:
             self.grafcet.reset()
         self.faults.clear()
+        self._sy[FAULT_BIT](0)
         self._restart_bit = COLD_RESTART_BIT
 
     def hot_restart(self) -> None:
