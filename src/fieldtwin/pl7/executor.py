@@ -1,0 +1,281 @@
+"""The master task of a PL7-3 program: PRE, CHART, POST, once per cycle.
+
+- A Literal-only program is its PRE; subroutines SRi run when called.
+- SY0 reads 1 during the first master task after a cold restart, SY1 during the
+  first one after a hot restart; the system resets them at the end of that task
+  (AEM 2.5-2, 5.1 "processing of a cold restart (setting system bit SY0 to 1)").
+- A cold restart clears the internal bits and words and puts the chart in its
+  initial situation; a hot restart keeps them (AEM 2.5-2, DEM 2.5-3).
+- SY7, the "minutes" system bit (DEM 5.3-1), follows the time given to
+  ``run_master_task``: a square wave of period one minute, 1 in its second half.
+- A run-time fault (an index out of its table, a Text Block misuse, division by
+  zero, a loop past its bound) abandons the sentence in which it happens, sets
+  SY18 (FAULT_BIT, docs/manual-notes.md) and is recorded in ``faults``; the task
+  goes on with the next sentence.  Nothing is ever raised out of a cycle.
+- Debugging: a breakpoint at a label or a step holds the executor at the end of
+  the master task that reached it; ``step()`` runs one master task, ``resume()``
+  lets it run again.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+
+from fieldtwin.pl7 import tree as t
+from fieldtwin.pl7.checker import DEFAULT_LIMITS, Limits, check
+from fieldtwin.pl7.compiler import NEXT, RET, Module, compile_body, compile_condition
+from fieldtwin.pl7.errors import Pl7Error, ProgramFault
+from fieldtwin.pl7.grafcet import ChartLayout, Grafcet
+from fieldtwin.pl7.memory import ProgramMemory
+from fieldtwin.pl7.parser import parse
+
+COLD_RESTART_BIT = 0  # SY0 (AEM 5.1)
+HOT_RESTART_BIT = 1  # SY1 (AEM 2.5-2)
+MINUTE_BIT = 7  # SY7 "Minutes" system bit (DEM 5.3-1)
+FAULT_BIT = 18  # SY18: a run-time program fault (our reading, docs/manual-notes.md)
+MINUTE_US = 60_000_000
+MAX_JUMPS = 10_000  # backward JUMPs in one run of a module before a fault
+MAX_CALL_DEPTH = 8  # nested CALLs before a fault
+MAX_FAULTS = 32  # faults kept in ``faults`` (the oldest go first)
+
+
+@dataclass(frozen=True, slots=True)
+class FaultRecord:
+    """A run-time fault: where (module, line), which master task and why."""
+
+    module: str
+    line: int
+    cycle: int
+    message: str
+
+    def __str__(self) -> str:
+        return f"{self.module} line {self.line} (task {self.cycle}): {self.message}"
+
+
+@dataclass(frozen=True, slots=True)
+class Hit:
+    """Where a breakpoint held the executor."""
+
+    cycle: int
+    module: str = ""
+    label: int | None = None
+    step: str | None = None
+
+    def __str__(self) -> str:
+        if self.step is not None:
+            return f"step {self.step} activated in task {self.cycle}"
+        return f"{self.module} L{self.label} reached in task {self.cycle}"
+
+
+class Executor:
+    """Runs one checked, compiled program against a ProgramMemory."""
+
+    def __init__(
+        self, program: t.Program, memory: ProgramMemory, limits: Limits = DEFAULT_LIMITS
+    ) -> None:
+        check(program, limits)
+        self.program = program
+        self.memory = memory
+        self.edges: list[int] = []
+        self.cycles = 0
+        self.faults: deque[FaultRecord] = deque(maxlen=MAX_FAULTS)
+        self.held: Hit | None = None
+        self.hits: list[Hit] = []
+        self._depth = 0
+        self._label_breaks: dict[str, set[int]] = {}
+        self._step_breaks: set[int] = set()
+        self._restart_bit: int | None = None
+        self._sy = {
+            bit: memory.bit_writer(t.Internal("SY", bit))
+            for bit in (COLD_RESTART_BIT, HOT_RESTART_BIT, MINUTE_BIT, FAULT_BIT)
+        }
+        self.grafcet: Grafcet | None = None
+        chart = program.section("CHART")
+        if isinstance(chart, t.Chart):
+            self.layout: ChartLayout | None = ChartLayout(chart)
+            self.grafcet = Grafcet(self.layout, [], {}, {})
+        else:
+            self.layout = None
+        self.modules: dict[str, Module] = {}
+        self._subroutines: dict[int, Module] = {}
+        self._compile(chart)
+        self.cold_restart()
+
+    @classmethod
+    def from_source(
+        cls, text: str, memory: ProgramMemory, limits: Limits = DEFAULT_LIMITS, source: str = ""
+    ) -> Executor:
+        program = parse(text, source)
+        try:
+            return cls(program, memory, limits)
+        except Pl7Error as err:
+            if source and not err.source:
+                raise Pl7Error(err.line, err.column, err.token, err.expected, source) from None
+            raise
+
+    def _compile(self, chart: t.Section | None) -> None:
+        for section in self.program.sections:
+            if isinstance(section, t.Literal):
+                module = compile_body(section.name, section.sentences, self.memory, self)
+                self.modules[section.name] = module
+                if section.name.startswith("SR"):
+                    self._subroutines[int(section.name[2:])] = module
+        if self.grafcet is None or self.layout is None or not isinstance(chart, t.Chart):
+            return
+        layout, g = self.layout, self.grafcet
+        for item in chart.items:
+            if isinstance(item, t.Transition):
+                condition = compile_condition(item.condition, self.memory, self)
+                source = layout.exit(item.chart, item.source)
+                target = layout.entry(item.chart, item.target)
+                g.transitions.append((source, target, condition, item.pos.line))
+            elif isinstance(item, t.StepActions):
+                prefix = "CHART" if item.chart == t.MAIN else f"XM{item.chart}"
+                name = f"{prefix} S({item.kind}){item.step}"
+                module = compile_body(name, item.sentences, self.memory, self)
+                table = g.on_activation if item.kind == "A" else g.on_deactivation
+                table[layout.index[(item.chart, item.step)]] = module
+
+    # --- Runtime (for the compiled code) ---------------------------------------------
+
+    def step_cells(self, obj: t.Internal) -> tuple[list[int], tuple[int, ...]]:
+        """Xi: the activity of step i; XMj: of every step of the expansion XMj."""
+        assert self.layout is not None and self.grafcet is not None
+        if obj.kind == "X":
+            return self.grafcet.active, (self.layout.index[(t.MAIN, str(obj.index))],)
+        return self.grafcet.active, tuple(self.layout.macro_steps(obj.index))
+
+    def call(self, sr: int) -> None:
+        if self._depth >= MAX_CALL_DEPTH:
+            raise ProgramFault(f"CALL SR{sr}: more than {MAX_CALL_DEPTH} nested calls")
+        self._depth += 1
+        try:
+            self.run_module(self._subroutines[sr])
+        finally:
+            self._depth -= 1
+
+    def run_module(self, module: Module) -> None:
+        code, n = module.code, len(module.code)
+        i = jumps = 0
+        while i < n:
+            r = code[i]()  # faults are caught, sentence by sentence, inside the chunk
+            if r == NEXT:
+                i += 1
+            elif r == RET:
+                return
+            else:
+                if r <= i:
+                    jumps += 1
+                    if jumps > MAX_JUMPS:
+                        message = f"more than {MAX_JUMPS} backward JUMPs in one run"
+                        self.fault(module.name, module.lines[i], ProgramFault(message))
+                        return
+                i = r
+
+    def watch(self, module: str) -> set[int]:
+        return self._label_breaks.setdefault(module, set())
+
+    def hit(self, module: str, label: int) -> None:
+        self._hit(Hit(self.cycles, module, label))
+
+    def fault(self, module: str, line: int, err: ProgramFault) -> None:
+        self.faults.append(FaultRecord(module, line, self.cycles, str(err)))
+        self._sy[FAULT_BIT](1)
+
+    # --- the master task ---------------------------------------------------------------
+
+    def cold_restart(self) -> None:
+        """Internal bits and words cleared, edges forgotten, chart to its initial steps."""
+        self.memory.clear_internal()
+        self.edges[:] = [0] * len(self.edges)
+        if self.grafcet is not None:
+            self.grafcet.reset()
+        self.faults.clear()
+        self._sy[FAULT_BIT](0)
+        self._restart_bit = COLD_RESTART_BIT
+
+    def hot_restart(self) -> None:
+        """Everything kept; SY1 reads 1 during the next master task."""
+        self._restart_bit = HOT_RESTART_BIT
+
+    def run_master_task(self, now_us: int | None = None) -> bool:
+        """One master task (PRE, CHART, POST) unless a breakpoint holds the executor."""
+        if self.held is not None:
+            return False
+        self._task(now_us)
+        return True
+
+    def step(self, now_us: int | None = None) -> None:
+        """Debugging: one master task, then hold again."""
+        self.held = None
+        self._task(now_us)
+        if self.held is None:
+            self.held = Hit(self.cycles)
+
+    def resume(self) -> None:
+        self.held = None
+
+    def _task(self, now_us: int | None) -> None:
+        self.cycles += 1
+        restart = self._restart_bit
+        if restart is not None:
+            self._sy[restart](1)
+        if now_us is not None:
+            self._sy[MINUTE_BIT](1 if now_us % MINUTE_US >= MINUTE_US // 2 else 0)
+        pre = self.modules.get("PRE")
+        if pre is not None:
+            self.run_module(pre)
+        g = self.grafcet
+        if g is not None:
+            g.evolve(self.run_module, self.fault)
+            if self._step_breaks:
+                for k in g.activated:
+                    if k in self._step_breaks:
+                        self._hit(Hit(self.cycles, step=str(g.layout.nodes[k])))
+        post = self.modules.get("POST")
+        if post is not None:
+            self.run_module(post)
+        if restart is not None:
+            self._sy[restart](0)
+            self._restart_bit = None
+
+    # --- debugging ----------------------------------------------------------------------
+
+    def break_at_label(self, module: str, label: int) -> None:
+        compiled = self.modules.get(module)
+        if compiled is None or label not in compiled.labels:
+            raise Pl7Error(0, 0, f"{module} L{label}", "a label of a Literal section")
+        self.watch(module).add(label)
+
+    def break_at_step(self, step: str) -> None:
+        if self.layout is None:
+            raise Pl7Error(0, 0, step, "a step of the chart (the program has no CHART)")
+        names = {str(node): k for k, node in enumerate(self.layout.nodes)}
+        if step not in names:
+            raise Pl7Error(0, 0, step, "a step of the chart: " + ", ".join(names))
+        self._step_breaks.add(names[step])
+
+    def clear_breakpoints(self) -> None:
+        for labels in self._label_breaks.values():
+            labels.clear()  # the compiled chunks keep these sets
+        self._step_breaks.clear()
+
+    def _hit(self, hit: Hit) -> None:
+        self.hits.append(hit)
+        del self.hits[:-MAX_FAULTS]
+        if self.held is None:
+            self.held = hit
+
+    # --- state ---------------------------------------------------------------------------
+
+    def active_steps(self) -> list[str]:
+        return [] if self.grafcet is None else self.grafcet.active_steps()
+
+    def step_active(self, step: str) -> bool:
+        if self.layout is None or self.grafcet is None:
+            return False
+        for k, node in enumerate(self.layout.nodes):
+            if str(node) == step:
+                return bool(self.grafcet.active[k])
+        raise Pl7Error(0, 0, step, "a step of the chart")
