@@ -17,11 +17,11 @@ from fieldtwin.modbus.pdu import encode_request
 from fieldtwin.modbus.slave import Transmission
 from fieldtwin.modbus.timing import RtuTiming
 from fieldtwin.tes import Tes
-from fieldtwin.transports.base import LineSettings
+from fieldtwin.transports.base import line_settings
 
 from .helpers import read_word, read_words
 
-TIMING = RtuTiming.from_format(LineSettings(38400, 8, "E", 1))
+TIMING = RtuTiming.from_format(line_settings(38400, 8, "E", 1))
 CT, T35 = TIMING.char_us, TIMING.t35_us
 CRC_ERRORS, GOOD_FRAMES = 0x01A, 0x01C  # §6.2.3.2 RS-485 counters of a TES 32EST
 
