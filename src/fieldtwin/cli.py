@@ -21,14 +21,20 @@ SUPPRESS_SPEED: object = object()  # --speed not given: the plant's [run] speed 
 
 
 def _speed(text: str) -> float | None:
-    if text.lower() in ("max", "fast", "0"):
+    from fieldtwin.plant import MAX_SPEED
+
+    if text.lower() == "max":
         return None
     try:
-        value = float(text.lower().lstrip("x"))
+        value = float(text.lower().removeprefix("x"))
     except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r}: a speed factor (1, 10, x10) or max") from None
-    if not 0 < value < math.inf:
-        raise argparse.ArgumentTypeError(f"{text!r}: the speed factor must be > 0")
+        raise argparse.ArgumentTypeError(
+            f"{text!r} not allowed (allowed: a speed factor such as 1, 10 or x10, or max)"
+        ) from None
+    if not 0 < value <= MAX_SPEED:
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: the speed factor must be > 0 and at most {MAX_SPEED:g} (or max)"
+        )
     return value
 
 
@@ -108,7 +114,8 @@ def _run(args: argparse.Namespace) -> int:
     from fieldtwin.runtime.runner import Runner
 
     plant_file = read_plant(args.plant)
-    speed = plant_speed(plant_file) if args.speed is SUPPRESS_SPEED else args.speed
+    own_speed = plant_speed(plant_file)  # checked even when --speed overrides it
+    speed = own_speed if args.speed is SUPPRESS_SPEED else args.speed
     clock = SimClock()
     runner = Runner(clock, speed)
     plant = build_plant(plant_file, runner=runner, speed=speed)
@@ -162,9 +169,10 @@ def _tick(speed: float | None) -> int:
 
 def _console(args: argparse.Namespace) -> int:
     from fieldtwin.console import Console, run_script
-    from fieldtwin.plant import FROM_PLANT, load_plant
+    from fieldtwin.plant import FROM_PLANT, load_plant, plant_speed, read_plant
 
     speed = FROM_PLANT if args.speed is SUPPRESS_SPEED else args.speed
+    plant_speed(read_plant(args.plant))  # an invalid [run] speed is reported even with --speed
     plant = load_plant(args.plant, speed=speed)
     console = Console(plant)
     if args.commands:
@@ -176,6 +184,13 @@ def _console(args: argparse.Namespace) -> int:
             lines = Path(args.script).read_text("utf-8").splitlines()
         except OSError as exc:
             print(f"fieldtwin: {args.script}: {exc.strerror}", file=sys.stderr)
+            return 2
+        except UnicodeDecodeError as exc:
+            print(
+                f"fieldtwin: {args.script}: not UTF-8 text (offset {exc.start}; a console"
+                " script is UTF-8)",
+                file=sys.stderr,
+            )
             return 2
         return run_script(console, lines, sys.stdout, sys.stderr, args.script)
     if not sys.stdin.isatty():

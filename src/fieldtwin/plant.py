@@ -27,7 +27,6 @@ every port.  Errors name the file and the field path: ``plant.toml: module[1].sl
 
 from __future__ import annotations
 
-import math
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -54,6 +53,8 @@ DEFAULT_PLANT = "default.toml"
 FROM_PLANT = "from plant"  # build_plant(speed=FROM_PLANT): take [run] speed
 TOP_LEVEL = ("plant", "plc", "module", "tes", "run")
 
+MAX_PLANT_BYTES = 4 * 1024 * 1024  # a plant file is read whole: bounded (DESIGN rule 14)
+MAX_SPEED = 1e6  # the largest speed factor: past it, "max" is what is meant
 
 @dataclass(frozen=True, slots=True)
 class PlantFile:
@@ -146,9 +147,19 @@ def read_plant(path: str | Path | None) -> PlantFile:
         return _parse(text, "<default plant>", Path.cwd())
     p = Path(path)
     try:
-        text = p.read_text("utf-8")
+        with p.open("rb") as file:
+            raw = file.read(MAX_PLANT_BYTES + 1)
     except OSError as exc:
         raise ConfigError(f"{p}: cannot read the plant file ({exc.strerror})") from None
+    if len(raw) > MAX_PLANT_BYTES:
+        raise ConfigError(f"{p}: larger than {MAX_PLANT_BYTES // 1024 // 1024} MiB (a plant file)")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(
+            f"{p}: not UTF-8 text (byte {raw[exc.start]:#04x} at offset {exc.start};"
+            " a plant file is UTF-8 TOML)"
+        ) from None
     return _parse(text, str(p), p.resolve().parent)
 
 
@@ -157,6 +168,8 @@ def _parse(text: str, name: str, base_dir: Path) -> PlantFile:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{name}: not valid TOML: {exc}") from None
+    except RecursionError:  # arrays or tables nested thousands deep
+        raise ConfigError(f"{name}: nested too deeply (not a plant file)") from None
     unknown = sorted(set(data) - set(TOP_LEVEL))
     if unknown:
         raise ConfigError(
@@ -262,9 +275,13 @@ def _table(data: Mapping[str, object], key: str, name: str) -> Mapping[str, obje
 def _speed(value: object, where: str) -> float | None:
     if value == "max":
         return None
-    if isinstance(value, bool) or not isinstance(value, int | float) or not 0 < value < math.inf:
-        raise ConfigError(f'{where}: {value!r} not allowed (allowed a number > 0, or "max")')
-    return float(value)
+    number = isinstance(value, int | float) and not isinstance(value, bool)
+    if not number or not 0 < value <= MAX_SPEED:  # type: ignore[operator]
+        raise ConfigError(
+            f'{where}: {value!r} not allowed (allowed a number > 0 and at most {MAX_SPEED:g},'
+            ' or "max")'
+        )
+    return float(value)  # type: ignore[arg-type]
 
 
 def _build_plc(

@@ -140,6 +140,18 @@ def parse_word(token: str) -> int:
     return to_unsigned(value)
 
 
+def plant_word(value: object, where: str) -> int:
+    """A word as a plant file gives it (``"H'0802'"`` or 0..65535); ConfigError naming ``where``."""
+    if isinstance(value, str):
+        try:
+            return parse_word(value)
+        except ConfigError as exc:
+            raise ConfigError(f"{where}: {exc}") from None
+    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= 0xFFFF:
+        raise ConfigError(f"{where}: {value!r} is not a word (0..65535 or \"H'0014'\")")
+    return value
+
+
 def format_hex(word: int, digits: int = 4) -> str:
     """160 -> ``H'00A0'``."""
     return f"H'{word & ((1 << (4 * digits)) - 1):0{digits}X}'"

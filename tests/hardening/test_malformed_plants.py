@@ -8,16 +8,21 @@ message names the file; nothing else may escape.
 
 from __future__ import annotations
 
+import contextlib
 import copy
+import io
+import json
 import math
 import tomllib
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from fieldtwin.cli import main
 from fieldtwin.errors import ConfigError
 from fieldtwin.plant import PlantFile, build_plant, read_plant
 
@@ -102,3 +107,61 @@ def test_the_generator_reaches_every_source_plant() -> None:
     for source in SOURCES:
         assert tomllib.loads(Path(ROOT / "examples" / "aem811.toml").read_text())
         assert list(_paths(dict(source.data)))
+
+
+def _toml_value(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        return (
+            "nan"
+            if math.isnan(value)
+            else ("inf" if value > 0 else "-inf")
+            if math.isinf(value)
+            else repr(value)
+        )
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, str):
+        return json.dumps(value, ensure_ascii=False)
+    if isinstance(value, list):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    return (
+        "{" + ", ".join(f"{json.dumps(str(k))} = {_toml_value(v)}" for k, v in value.items()) + "}"
+    )
+
+
+def _toml(data: dict[str, Any]) -> str:
+    """The document as TOML: every table inline (enough for generated documents)."""
+    return "".join(f"{json.dumps(key)} = {_toml_value(value)}\n" for key, value in data.items())
+
+
+def _no_real_ports(data: dict[str, Any]) -> None:
+    for tes in data.get("tes", []) if isinstance(data.get("tes"), list) else []:
+        if isinstance(tes, dict) and isinstance(tes.get("endpoint"), str):
+            tes["endpoint"] = "tcp://127.0.0.1:0"
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(doc=documents(), command=st.sampled_from(["run", "console"]))
+def test_run_and_console_answer_a_malformed_plant_with_status_2_and_a_message(
+    doc: tuple[str, dict[str, Any]], command: str, tmp_path_factory: pytest.TempPathFactory
+) -> None:
+    _name, data = doc
+    _no_real_ports(data)
+    folder = tmp_path_factory.mktemp("plant")
+    for csv in (ROOT / "examples").glob("*.csv"):
+        (folder / csv.name).write_bytes(csv.read_bytes())
+    path = folder / "plant.toml"
+    path.write_text(_toml(data), encoding="utf-8")
+    err = io.StringIO()
+    args = (
+        ["--no-live", "--duration", "0.05", "--speed", "max"]
+        if command == "run"
+        else ["-c", "time"]
+    )
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        status = main([command, str(path), *args])  # an escaping exception fails the test
+    assert status in (0, 2), (status, err.getvalue())
+    if status == 2:
+        assert f"{path}" in err.getvalue() or "plant.toml" in err.getvalue(), err.getvalue()

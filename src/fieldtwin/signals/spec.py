@@ -32,6 +32,8 @@ Signal = AnalogSignal | DiscreteSignal
 DISCRETE_TYPES = (DiscreteConstant, PulseTrain, Edges, RandomEdges)
 
 
+MAX_TIME_S = 1e9  # about 31 years: times and durations of a signal stay below it
+
 class _Fields:
     """The keys of one spec table, read once each; leftovers are reported."""
 
@@ -73,13 +75,17 @@ class _Fields:
         value = self.number(key, default)
         if value < 0:
             raise self.fail(key, f"{value} s is negative (allowed >= 0)")
+        if value > MAX_TIME_S:
+            raise self.fail(key, f"{value} s not allowed (allowed 0..{MAX_TIME_S:g} s)")
         return seconds(value)
 
     def period_us(self, key: str, default: float | None = None) -> int:
         """A duration in seconds (> 0, at least 1 us) -> us."""
         value = self.number(key, default)
-        if seconds(value) < 1:
-            raise self.fail(key, f"{value} s is not a duration > 0 (allowed >= 0.000001 s)")
+        if not 0 < value <= MAX_TIME_S or seconds(value) < 1:
+            raise self.fail(
+                key, f"{value} s is not a duration (allowed 0.000001..{MAX_TIME_S:g} s)"
+            )
         return seconds(value)
 
     def items(self, key: str, default: list[object] | None = None) -> list[object]:
@@ -134,10 +140,10 @@ def _square(f: _Fields) -> Signal:
 
 
 def _is_time(value: object) -> TypeGuard[float]:
-    """A number of seconds >= 0."""
+    """A number of seconds in 0..MAX_TIME_S."""
     if isinstance(value, bool) or not isinstance(value, int | float):
         return False
-    return math.isfinite(value) and value >= 0
+    return math.isfinite(value) and 0 <= value <= MAX_TIME_S
 
 
 def _pair(f: _Fields, key: str, index: int, item: object) -> tuple[float, object]:
@@ -145,7 +151,7 @@ def _pair(f: _Fields, key: str, index: int, item: object) -> tuple[float, object
         raise f.fail(f"{key}[{index}]", f"{item!r} is not a pair [time_s, value]")
     t, value = item
     if not _is_time(t):
-        raise f.fail(f"{key}[{index}]", f"time {t!r} is not a number of seconds >= 0")
+        raise f.fail(f"{key}[{index}]", f"time {t!r} is not a number of seconds in 0..{MAX_TIME_S:g}")
     return float(t), value
 
 
@@ -198,7 +204,7 @@ def _edges(f: _Fields) -> Signal:
     times = []
     for index, item in enumerate(f.items("times_s")):
         if not _is_time(item):
-            raise f.fail(f"times_s[{index}]", f"{item!r} is not a number of seconds >= 0")
+            raise f.fail(f"times_s[{index}]", f"{item!r} is not a number of seconds in 0..{MAX_TIME_S:g}")
         times.append(seconds(item))
     return Edges(initial, times)
 

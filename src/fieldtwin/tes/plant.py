@@ -118,7 +118,7 @@ def endpoint_of(table: Mapping[str, Any], at: str) -> Endpoint:
 
 def link_of(table: Mapping[str, Any], at: str) -> Link:
     name = table.get("link", "rs485")
-    if name not in LINKS:
+    if not isinstance(name, str) or name not in LINKS:
         raise ConfigError(f"{at}.link: {name!r} not allowed (allowed: rs485, rs232)")
     return LINKS[name]
 

@@ -28,7 +28,7 @@ from fieldtwin.tsx.dem24.civil import parse_iso
 from fieldtwin.tsx.dem24.config import Refusal, check_config
 from fieldtwin.tsx.dem24.inputs import CHANNELS
 from fieldtwin.tsx.dem24.timebase import TimeReference
-from fieldtwin.words import parse_word
+from fieldtwin.words import plant_word
 
 if TYPE_CHECKING:
     from fieldtwin.tsx.dem24.models import Dem24
@@ -131,17 +131,13 @@ def _sync(mod: Dem24, spec: Any, where: str, wire_sync: WireSync | None) -> None
 def _config(mod: Dem24, spec: Any, where: str) -> None:
     if not isinstance(spec, list) or len(spec) != 9:
         raise ConfigError(f"{where}: must be a list of the 9 configuration words (DEM 3.2-1)")
-    words = [parse_word(str(w)) if isinstance(w, str) else _word(w, where) for w in spec]
+    words = [plant_word(w, f"{where}[{i}]") for i, w in enumerate(spec)]
     result = check_config(words)
     if isinstance(result, Refusal):
         raise ConfigError(f"{where}: refused by the module: {result.reason}")
     mod.plant_startup.append(_once(lambda m, now: m.apply_config(result, now)))
 
 
-def _word(value: Any, where: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= 0xFFFF:
-        raise ConfigError(f"{where}: {value!r} is not a word (0..65535 or \"H'0014'\")")
-    return value
 
 
 def _time(mod: Dem24, table: Mapping[str, Any], where: str) -> None:

@@ -25,7 +25,7 @@ from fieldtwin.errors import ConfigError
 from fieldtwin.tsx.scm import config as cfgmod
 from fieldtwin.tsx.scm.adaptors import Signals
 from fieldtwin.tsx.scm.variants import Adaptor
-from fieldtwin.words import parse_word, words_to_bytes
+from fieldtwin.words import plant_word, words_to_bytes
 
 if TYPE_CHECKING:
     from fieldtwin.tsx.scm.module import ScmModule
@@ -102,7 +102,7 @@ def _channel(module: ScmModule, entry: Any, where: str, wiring: Wiring | None) -
 
 
 def _config(module: ScmModule, channel: int, value: Any, where: str) -> None:
-    words = [parse_word(str(v)) if isinstance(v, str) else int(v) for v in _list(value, where)]
+    words = [plant_word(v, f"{where}[{i}]") for i, v in enumerate(_list(value, where))]
     fd_allowed = channel == 1 and module.variant.full_duplex_ch1
     try:
         config = cfgmod.decode(words_to_bytes(words), channel, fd_allowed)
