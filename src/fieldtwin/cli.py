@@ -158,7 +158,10 @@ def _run(args: argparse.Namespace) -> int:
         else:
             runner.run_forever(tick, tick_us=_tick(speed))
     finally:
+        final = [] if live else plain_status(plant)  # the plant as it stopped (issue 10 item 21)
         plant.close()
+    if final:
+        print("\n".join(final), flush=True)
     print(f"stopped at t = {clock.now / S:.3f} s", flush=True)
     return 0
 

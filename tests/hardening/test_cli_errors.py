@@ -87,3 +87,18 @@ def test_speed_words_other_than_max_are_refused(tmp_path: Path) -> None:
         ["run", "plant.toml", "--no-live", "--duration", "1", "--speed", "fast"], tmp_path
     )
     _refused(done, "--speed", "'fast'")
+
+
+def test_run_with_a_duration_ends_with_the_final_status(tmp_path: Path) -> None:
+    # issue 10 item 21: `fieldtwin run --duration` printed no final status line
+    done = fieldtwin(
+        ["run", str(ROOT / "examples" / "aem811.toml"), "--no-live", "--duration", "3"]
+        + ["--speed", "max"],
+        tmp_path,
+    )
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    assert lines[-3:-1] == ["t = 3.000 s", lines[-2]] and lines[-2].startswith(
+        "slot 5 TSX AEM 811:"
+    )
+    assert lines[-1] == "stopped at t = 3.000 s"

@@ -71,7 +71,7 @@ def test_3_1_2_prm_jumper_gives_the_factory_settings() -> None:
         ("rs485.baud", 14400, r"rs485.baud: 14400 is not allowed \(allowed: 1200, .*38400\)"),
         ("rs232.parity", "X", r"rs232.parity: 'X' is not allowed \(allowed: N, E, O\)"),
         ("rs485.answer_delay_ms", 2571, r"allowed 0..2570"),
-        ("filter_0_ms", 7, r"filter_0_ms: 7 out of range \(allowed 0..32765 by steps of 5\)"),
+        ("filter_0_ms", 7, r"filter_0_ms: 7 is not a multiple of 5 \(allowed 0..32765 by steps of 5\)"),
         ("ai0.filter", 3, r"allowed: 2, 4, 8, 16, 32, 64, 128, 256"),
         ("ai0.out_high", 4, r"allowed -1..3"),
         ("nonsense", 1, r"TES 8EA has no parameter 'nonsense'"),
@@ -220,3 +220,16 @@ def test_a_database_that_is_not_a_store_is_refused(tmp_path: Path, script: str) 
     for readonly in (False, True):
         with pytest.raises(ConfigError, match=rf"{db}: not a fieldtwin TES store"):
             ParameterStore(db, readonly=readonly)
+
+
+def test_a_filter_off_the_5_ms_step_says_multiple_of_5() -> None:
+    # issue 10 item 21: `set filter_0_ms 7` said "out of range"
+    from fieldtwin.errors import ConfigError
+    from fieldtwin.tes.models import model_named
+    from fieldtwin.tes.params import param_specs
+
+    spec = param_specs(model_named("TES 32EST"))["filter_0_ms"]
+    with pytest.raises(ConfigError, match=r"filter_0_ms: 7 is not a multiple of 5"):
+        spec.parse("7")
+    with pytest.raises(ConfigError, match=r"filter_0_ms: 40000 out of range"):
+        spec.parse("40000")

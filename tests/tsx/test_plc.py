@@ -386,3 +386,13 @@ def test_dem_6_2_2_limit_in_a_plant_file(tmp_path: Path) -> None:
     plant.write_text('[plc]\nmodel = "TSX 87"\n\n' + modules)
     with pytest.raises(ConfigError, match=r"module\[32\].*at most 32 time-stamping modules"):
         load_plant(plant)
+
+
+def test_text_blocks_are_txt0_to_txt63() -> None:
+    # issue 10 item 21: `txt 9999` had no range check; AEM 3.5-1 "N/MAX : 4 /64"
+    plc = Plc(model="TSX 87", scan_ms=10)
+    assert plc.text_block(63).index == 63
+    with pytest.raises(ConfigError, match=r"TXT64: no such Text Block \(allowed TXT0..TXT63"):
+        plc.text_block(64)
+    with pytest.raises(ConfigError, match="TXT-1"):
+        plc.start_exchange(m=0x0563, c=0x0F, txt=-1)

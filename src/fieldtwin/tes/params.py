@@ -54,8 +54,12 @@ class ParamSpec:
                 )
             return value
         assert isinstance(value, int)
-        if not self.lo <= value <= self.hi or value % self.step:
+        if not self.lo <= value <= self.hi:
             raise ConfigError(f"{self.name}: {value} out of range (allowed {self.allowed()})")
+        if value % self.step:
+            raise ConfigError(
+                f"{self.name}: {value} is not a multiple of {self.step} (allowed {self.allowed()})"
+            )
         return value
 
     def _coerce(self, raw: object) -> Value:

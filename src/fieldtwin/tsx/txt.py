@@ -36,6 +36,8 @@ if TYPE_CHECKING:
     from fieldtwin.tsx.module import IntelligentModule
 
 DATA_WORDS = 4096  # internal words W0..W4095 (Text Block tables, manual-notes F-12)
+# AEM 3.5-1 configuration screen "NUMBER OF TEXT BLOCKS N/MAX : 4 /64": TXT0..TXT63
+TEXT_BLOCKS = 64
 
 # M -> (module, present in its slot), or None for an empty slot
 Lookup = Callable[[int], "tuple[IntelligentModule, bool] | None"]
@@ -184,7 +186,15 @@ class TextBlocks:
         self._txts: dict[int, TextBlock] = {}
 
     def block(self, index: int) -> TextBlock:
-        return self._txts.setdefault(index, TextBlock(index))
+        if isinstance(index, bool) or not isinstance(index, int) or not 0 <= index < TEXT_BLOCKS:
+            raise ConfigError(
+                f"TXT{index}: no such Text Block (allowed TXT0..TXT{TEXT_BLOCKS - 1},"
+                f" a PLC has at most {TEXT_BLOCKS})"
+            )
+        found = self._txts.get(index)
+        if found is None:
+            found = self._txts[index] = TextBlock(index)
+        return found
 
     def end_of_task(self, now: int, running: bool) -> None:
         """Report the answers that came in, then validate the new requests."""
