@@ -92,4 +92,24 @@ class CharFormat:
         return f"{self.baud} {self.frame}"
 
 
-__all__ = ["DATA_BITS", "STOP_BITS", "CharFormat", "Parity"]
+LINE_DATA_BITS = (7, 8)  # what a transport's serial line takes
+
+
+def line_settings(
+    baud: int = 9600, data_bits: int = 8, parity: str | Parity = "N", stop_bits: int = 1
+) -> CharFormat:
+    """A transport's character format, checked: 7 or 8 data bits, parity N/E/O, 1 or 2 stops."""
+    if isinstance(baud, bool) or not isinstance(baud, int) or baud <= 0:
+        raise ConfigError(f"line setting baud={baud!r}: allowed a whole number > 0")
+    if data_bits not in LINE_DATA_BITS:
+        raise ConfigError(f"line setting data_bits={data_bits!r}: allowed 7 or 8")
+    if not isinstance(parity, Parity):
+        if parity not in tuple(p.value for p in Parity):
+            raise ConfigError(f"line setting parity={parity!r}: allowed N, E or O")
+        parity = Parity(parity)
+    if stop_bits not in STOP_BITS:
+        raise ConfigError(f"line setting stop_bits={stop_bits!r}: allowed 1 or 2")
+    return CharFormat(baud, data_bits, parity, stop_bits)
+
+
+__all__ = ["DATA_BITS", "LINE_DATA_BITS", "STOP_BITS", "CharFormat", "Parity", "line_settings"]

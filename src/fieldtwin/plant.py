@@ -56,6 +56,7 @@ TOP_LEVEL = ("plant", "plc", "module", "tes", "run")
 MAX_PLANT_BYTES = 4 * 1024 * 1024  # a plant file is read whole: bounded (DESIGN rule 14)
 MAX_SPEED = 1e6  # the largest speed factor: past it, "max" is what is meant
 
+
 @dataclass(frozen=True, slots=True)
 class PlantFile:
     """A parsed, not yet built, plant file."""
@@ -278,7 +279,7 @@ def _speed(value: object, where: str) -> float | None:
     number = isinstance(value, int | float) and not isinstance(value, bool)
     if not number or not 0 < value <= MAX_SPEED:  # type: ignore[operator]
         raise ConfigError(
-            f'{where}: {value!r} not allowed (allowed a number > 0 and at most {MAX_SPEED:g},'
+            f"{where}: {value!r} not allowed (allowed a number > 0 and at most {MAX_SPEED:g},"
             ' or "max")'
         )
     return float(value)  # type: ignore[arg-type]

@@ -13,7 +13,7 @@ from fieldtwin.errors import ConfigError
 from fieldtwin.modbus.model import Link
 from fieldtwin.tes import Tes
 from fieldtwin.tes.plant import build_tes
-from fieldtwin.tes.serve import line_settings
+from fieldtwin.runtime.tes_lines import line_settings
 from fieldtwin.transports.url import parse_endpoint
 
 from .helpers import pair, read_word

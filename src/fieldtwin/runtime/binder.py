@@ -4,7 +4,7 @@ A device lists its ports (:meth:`fieldtwin.devices.face.Device.ports`); a port
 belongs to a group that says how it is opened:
 
 * ``modbus`` (a TES): every TES naming the same endpoint shares one line, served
-  by the Modbus server glue (fieldtwin.tes.serve: TCP, RTU over TCP, pty, serial);
+  by the Modbus server glue (fieldtwin.runtime.tes_lines: TCP, RTU over TCP, pty, serial);
 * ``scm`` (an SCM channel): the channel's own raw-character line, opened by the
   SCM's endpoint functions (fieldtwin.tsx.scm.endpoints, through the module's
   ``attach``), pumped by the PLC's runner.
@@ -64,7 +64,7 @@ def bind(
 
 
 def _serve_modbus(devices: Sequence[Device], runner: Runner | None, binding: Binding) -> None:
-    from fieldtwin.tes.serve import serve_group
+    from fieldtwin.runtime.tes_lines import serve_group
 
     lines: dict[str, list[TesDevice]] = {}
     for device in devices:

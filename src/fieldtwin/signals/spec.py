@@ -34,6 +34,7 @@ DISCRETE_TYPES = (DiscreteConstant, PulseTrain, Edges, RandomEdges)
 
 MAX_TIME_S = 1e9  # about 31 years: times and durations of a signal stay below it
 
+
 class _Fields:
     """The keys of one spec table, read once each; leftovers are reported."""
 
@@ -151,7 +152,9 @@ def _pair(f: _Fields, key: str, index: int, item: object) -> tuple[float, object
         raise f.fail(f"{key}[{index}]", f"{item!r} is not a pair [time_s, value]")
     t, value = item
     if not _is_time(t):
-        raise f.fail(f"{key}[{index}]", f"time {t!r} is not a number of seconds in 0..{MAX_TIME_S:g}")
+        raise f.fail(
+            f"{key}[{index}]", f"time {t!r} is not a number of seconds in 0..{MAX_TIME_S:g}"
+        )
     return float(t), value
 
 
@@ -204,7 +207,9 @@ def _edges(f: _Fields) -> Signal:
     times = []
     for index, item in enumerate(f.items("times_s")):
         if not _is_time(item):
-            raise f.fail(f"times_s[{index}]", f"{item!r} is not a number of seconds in 0..{MAX_TIME_S:g}")
+            raise f.fail(
+                f"times_s[{index}]", f"{item!r} is not a number of seconds in 0..{MAX_TIME_S:g}"
+            )
         times.append(seconds(item))
     return Edges(initial, times)
 

@@ -21,13 +21,13 @@ from pathlib import Path
 from typing import Any
 
 from fieldtwin.clock import MS, SimClock
+from fieldtwin.endpoint import Endpoint, parse_endpoint
 from fieldtwin.errors import ConfigError
 from fieldtwin.modbus.model import Link
 from fieldtwin.signals import analog_from_spec, discrete_from_spec
 from fieldtwin.tes.model import Tes
 from fieldtwin.tes.models import model_named
 from fieldtwin.tes.port import check_fixed_format
-from fieldtwin.transports.url import Endpoint, parse_endpoint
 
 KEYS = ("model", "slave", "endpoint", "name", "store", "prm_jumper", "link", "inputs", "faults")
 FAULT_KEYS = ("short", "open", "not_ready_ms", "powered")
@@ -208,7 +208,7 @@ def start_tes_endpoints(
     tes_list: Sequence[Tes], tables: Sequence[Mapping[str, Any]], runner: Any
 ) -> list[Any]:
     """Group the TES by endpoint and serve each group (``fieldtwin run`` prints describe())."""
-    from fieldtwin.tes.serve import serve_group
+    from fieldtwin.runtime.tes_lines import serve_group
 
     groups: dict[str, list[int]] = {}
     for i, table in enumerate(tables):

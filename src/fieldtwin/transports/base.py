@@ -12,8 +12,9 @@ from __future__ import annotations
 
 from typing import NoReturn, Protocol, runtime_checkable
 
-from fieldtwin.charformat import CharFormat, Parity
-from fieldtwin.errors import ConfigError, TransportError
+from fieldtwin.charformat import CharFormat
+from fieldtwin.charformat import line_settings as line_settings  # re-exported
+from fieldtwin.errors import TransportError
 
 DATA_BITS = (7, 8)
 PARITIES = ("N", "E", "O")
@@ -24,23 +25,6 @@ READ_CHUNK = 65536
 # (issue 9 item 3).  ``LineSettings`` stays as its name here for the code that
 # imports it; ``line_settings`` builds one from the usual letters ("8E1").
 LineSettings = CharFormat
-
-
-def line_settings(
-    baud: int = 9600, data_bits: int = 8, parity: str | Parity = "N", stop_bits: int = 1
-) -> CharFormat:
-    """A transport's character format, checked: 7 or 8 data bits, parity N/E/O, 1 or 2 stops."""
-    if isinstance(baud, bool) or not isinstance(baud, int) or baud <= 0:
-        raise ConfigError(f"line setting baud={baud!r}: allowed a whole number > 0")
-    if data_bits not in DATA_BITS:
-        raise ConfigError(f"line setting data_bits={data_bits!r}: allowed 7 or 8")
-    if not isinstance(parity, Parity):
-        if parity not in PARITIES:
-            raise ConfigError(f"line setting parity={parity!r}: allowed N, E or O")
-        parity = Parity(parity)
-    if stop_bits not in STOP_BITS:
-        raise ConfigError(f"line setting stop_bits={stop_bits!r}: allowed 1 or 2")
-    return CharFormat(baud, data_bits, parity, stop_bits)
 
 
 class AcceptFailed(TransportError):

@@ -138,8 +138,6 @@ def _config(mod: Dem24, spec: Any, where: str) -> None:
     mod.plant_startup.append(_once(lambda m, now: m.apply_config(result, now)))
 
 
-
-
 def _time(mod: Dem24, table: Mapping[str, Any], where: str) -> None:
     text = table["time"]
     if not isinstance(text, str):
