@@ -130,6 +130,8 @@ def _run(args: argparse.Namespace) -> int:
         print(line, flush=True)
     for warning in warnings_for(endpoints):  # issue 10 item 7
         print(warning, file=sys.stderr, flush=True)
+    for note in plant.notes:  # e.g. an analog level beyond the converter's span (TES §4.2.4)
+        print(f"fieldtwin: note: {note}", file=sys.stderr, flush=True)
     print(
         f"running {plant.title} at {'max speed' if speed is None else f'x{speed:g}'}",
         flush=True,
@@ -177,6 +179,8 @@ def _console(args: argparse.Namespace) -> int:
     speed = FROM_PLANT if args.speed is SUPPRESS_SPEED else args.speed
     plant_speed(read_plant(args.plant))  # an invalid [run] speed is reported even with --speed
     plant = load_plant(args.plant, speed=speed)
+    for note in plant.notes:
+        print(f"fieldtwin: note: {note}", file=sys.stderr, flush=True)
     console = Console(plant)
     if args.commands:
         return run_script(console, args.commands, sys.stdout, sys.stderr, "-c")

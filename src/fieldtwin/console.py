@@ -397,8 +397,8 @@ class Console:
 def set_input(device: Device, head: str, args: list[str]) -> list[str]:
     """``NAME VALUE`` on any device: ``input 5 0 = 2.5V``, ``tes 1 input 3 = true``."""
     name, value = args
-    device.input(name).set(value)
-    return [f"{head} {name} = {value}"]
+    note = device.input(name).set(value)
+    return [f"{head} {name} = {value}", *([f"note: {note}"] if note else [])]
 
 
 def set_signal(device: Device, head: str, args: list[str]) -> list[str]:

@@ -77,6 +77,7 @@ class Plant:
     devices: list[Device] = field(default_factory=list)  # in file order: modules, then TES
     speed: float | None = 1.0
     bindings: list[Binding] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)  # what devices said of the file's inputs
 
     # --- devices -----------------------------------------------------------
 
@@ -204,7 +205,7 @@ def build_plant(
     ctx.finish()
     if plc is not None:
         _initial_outputs(plc, outputs, f"{name}: plc.outputs")
-    return Plant(name, title, clock, plc, list(ctx.devices), speed=pace)
+    return Plant(name, title, clock, plc, list(ctx.devices), speed=pace, notes=list(ctx.notes))
 
 
 def _array(data: Mapping[str, object], key: str, name: str) -> list[object]:

@@ -18,22 +18,30 @@ from fieldtwin.devices.face import Device
 from fieldtwin.errors import ConfigError
 
 
-def apply_inputs(device: Device, spec: Mapping[str, object], where: str, base_dir: Path) -> None:
+def apply_inputs(
+    device: Device, spec: Mapping[str, object], where: str, base_dir: Path
+) -> list[str]:
+    """Set or drive every input of ``spec``; the notes the device gave, each with its field."""
+    notes: list[str] = []
     for key, value in spec.items():
         field = f"{where}.{key}"
+        note = None
         try:
             point = device.input(str(key))
             if isinstance(value, Mapping):
                 point.drive(value, where=field, base_dir=base_dir)
             elif isinstance(value, bool | str):
-                point.set(value)
+                note = point.set(value)
             elif isinstance(value, int | float):
-                point.set(float(value))
+                note = point.set(float(value))
             else:
                 raise ConfigError(f"{value!r} is not a value or a signal table")
         except ConfigError as exc:
             text = str(exc)
             raise ConfigError(text if text.startswith(field) else f"{field}: {text}") from None
+        if note is not None:
+            notes.append(f"{field}: {note}")
+    return notes
 
 
 def apply_faults(device: Device, names: object, where: str) -> None:

@@ -27,6 +27,7 @@ class BuildContext:
     name: str  # the plant file, as errors name it
     devices: list[Device] = field(default_factory=list)  # built so far, in file order
     later: list[Callable[[], None]] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)  # what devices said of their inputs
 
     def require_plc(self, where: str) -> Plc:
         if self.plc is None:

@@ -91,11 +91,12 @@ class Input:
 
     name: str
     description: str  # its kind and unit: "analog, volts or milliamps"
-    setter: Callable[[InputValue], None]
+    setter: Callable[[InputValue], str | None]  # returns a note (a level that saturates)
     driver: Callable[[SignalSpec, str, Path | None], None] | None = None
 
-    def set(self, value: InputValue) -> None:
-        self.setter(value)
+    def set(self, value: InputValue) -> str | None:
+        """Set the input; a note when the device took it otherwise (e.g. saturated)."""
+        return self.setter(value)
 
     def drive(self, spec: SignalSpec, *, where: str, base_dir: Path | None = None) -> None:
         if self.driver is None:

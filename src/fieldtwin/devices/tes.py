@@ -168,14 +168,14 @@ class TesDevice:
             )
         self.tes.set_input(i, text in _TRUE)
 
-    def _level(self, k: int, value: InputValue) -> None:
+    def _level(self, k: int, value: InputValue) -> str | None:
         if isinstance(value, bool):
             raise ConfigError(f"{self.kind} input a{k}: {value!r} is not a number")
         try:
             number = float(value)
         except ValueError:
             raise ConfigError(f"{self.kind} input a{k}: {value!r} is not a number") from None
-        self.tes.set_input(k, number)
+        return self.tes.set_input(k, number)  # the note of a level beyond the span (§4.2.4)
 
     def _drive(
         self, i: int, spec: SignalSpec, where: str, base: Path | None, digital: bool
@@ -241,7 +241,7 @@ def _builder() -> Build:
         inputs = table.get("inputs", {})
         if not isinstance(inputs, Mapping):
             raise ConfigError(f"{where}.inputs: not a table (e.g. {{ 0 = true, a2 = 4.5 }})")
-        apply_inputs(device, inputs, f"{where}.inputs", ctx.base_dir)
+        ctx.notes += apply_inputs(device, inputs, f"{where}.inputs", ctx.base_dir)
         faults = table.get("faults")
         if isinstance(faults, list):
             apply_faults(device, faults, f"{where}.faults")
