@@ -91,11 +91,8 @@ def test_speed_words_other_than_max_are_refused(tmp_path: Path) -> None:
 
 def test_run_with_a_duration_ends_with_the_final_status(tmp_path: Path) -> None:
     # issue 10 item 21: `fieldtwin run --duration` printed no final status line
-    done = fieldtwin(
-        ["run", str(ROOT / "examples" / "aem811.toml"), "--no-live", "--duration", "3"]
-        + ["--speed", "max"],
-        tmp_path,
-    )
+    example = str(ROOT / "examples" / "aem811.toml")
+    done = fieldtwin(["run", example, "--no-live", "--duration", "3", "--speed", "max"], tmp_path)
     assert done.returncode == 0, done.stderr
     lines = done.stdout.splitlines()
     assert lines[-3:-1] == ["t = 3.000 s", lines[-2]] and lines[-2].startswith(

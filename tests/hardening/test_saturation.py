@@ -6,7 +6,10 @@ from pathlib import Path
 
 from tests.hardening.test_cli_errors import fieldtwin
 
-PLANT = '[[tes]]\nmodel = "TES 8EA"\nslave = 2\nendpoint = "tcp://127.0.0.1:0"\ninputs = { a0 = 15.0 }\n'
+PLANT = (
+    '[[tes]]\nmodel = "TES 8EA"\nslave = 2\nendpoint = "tcp://127.0.0.1:0"\n'
+    "inputs = { a0 = 15.0 }\n"
+)
 
 
 def test_plant_and_console_say_when_a_level_saturates(tmp_path: Path) -> None:

@@ -71,7 +71,11 @@ def test_3_1_2_prm_jumper_gives_the_factory_settings() -> None:
         ("rs485.baud", 14400, r"rs485.baud: 14400 is not allowed \(allowed: 1200, .*38400\)"),
         ("rs232.parity", "X", r"rs232.parity: 'X' is not allowed \(allowed: N, E, O\)"),
         ("rs485.answer_delay_ms", 2571, r"allowed 0..2570"),
-        ("filter_0_ms", 7, r"filter_0_ms: 7 is not a multiple of 5 \(allowed 0..32765 by steps of 5\)"),
+        (
+            "filter_0_ms",
+            7,
+            r"filter_0_ms: 7 is not a multiple of 5 \(allowed 0..32765 by steps of 5\)",
+        ),
         ("ai0.filter", 3, r"allowed: 2, 4, 8, 16, 32, 64, 128, 256"),
         ("ai0.out_high", 4, r"allowed -1..3"),
         ("nonsense", 1, r"TES 8EA has no parameter 'nonsense'"),

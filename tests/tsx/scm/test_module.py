@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from fieldtwin.errors import ConfigError
 from fieldtwin.devices.scm import ScmDevice
+from fieldtwin.errors import ConfigError
 from fieldtwin.live import mode
 from fieldtwin.tsx.plc import Plc
 from fieldtwin.tsx.scm import MODULE_TYPES, VARIANTS
