@@ -14,7 +14,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def _read_until(fd: int, marker: bytes, limit_s: float = 20.0) -> bytes:
+def _read_until(fd: int, marker: bytes, limit_s: float = 60.0) -> bytes:
     data = b""
     deadline = time.monotonic() + limit_s
     while marker not in data:
