@@ -65,6 +65,20 @@ def test_interactive_session_with_help_errors_and_quit(tmp_path: Path) -> None:
     assert (tmp_path / ".fieldtwin_history").exists()
 
 
+SELECT_SYSCALLS = {"7", "23", "270", "271"}  # poll, select, pselect6, ppoll (x86_64)
+
+
+def _wait_in_select(pid: int, limit_s: float = 30.0) -> None:
+    """Until the process waits for input in its select (bounded), from /proc/PID/syscall."""
+    deadline = time.monotonic() + limit_s
+    while time.monotonic() < deadline:
+        with open(f"/proc/{pid}/syscall") as file:
+            if file.read().split(" ", 1)[0] in SELECT_SYSCALLS:
+                return
+        select.select([], [], [], 0.005)
+    raise AssertionError(f"process {pid} never waited for input")
+
+
 def _console_on_a_terminal(tmp_path: Path) -> tuple[subprocess.Popen[bytes], int]:
     """The console with the pty as its controlling terminal, so that ^C is a SIGINT."""
     plant = tmp_path / "p.toml"
@@ -108,7 +122,10 @@ def test_ctrl_c_interrupts_advance_and_keeps_the_plant(tmp_path: Path) -> None:
         assert b"W7 = 42" in _read_until(master, b"fieldtwin> ")
         os.write(master, b"time\n")
         assert f"t = {stopped:.3f} s".encode() in _read_until(master, b"fieldtwin> ")
-        os.write(master, b"adv\x03")  # at the prompt: the line is dropped, the session stays
+        os.write(master, b"adv")  # at the prompt: the line is dropped, the session stays
+        _read_until(master, b"adv")  # echoed: readline has the line
+        _wait_in_select(proc.pid)  # CPython's readline misses a SIGINT taken outside its select
+        os.write(master, b"\x03")
         assert b"^C" in _read_until(master, b"fieldtwin> ")
         os.write(master, b"read W7\n")
         assert b"W7 = 42" in _read_until(master, b"fieldtwin> ")
