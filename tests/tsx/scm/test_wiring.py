@@ -4,7 +4,9 @@ phase (PSR), injected reception faults that outlive a reconfiguration, table lim
 from __future__ import annotations
 
 import os
+import select
 import termios
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -55,8 +57,19 @@ def test_serial_endpoint_follows_the_channel_configuration(pty_pair: tuple[int, 
     assert seven_even or "host port refused" in mod.status()["channel 0"]
     assert not cflag & termios.PARODD and not cflag & termios.CSTOPB
     r = plc.exchange(m=0x0700, c=0x01, send_bytes=b"OK")
-    assert r.v == 0 and os.read(master, 16) == b"OK"
+    assert r.v == 0 and _read_exactly(master, 2) == b"OK"
     mod.detach(0)
+
+
+def _read_exactly(fd: int, count: int, limit_s: float = 10.0) -> bytes:
+    """``count`` bytes from ``fd``: the characters may reach the pty in separate writes."""
+    data = b""
+    deadline = time.monotonic() + limit_s
+    while len(data) < count and time.monotonic() < deadline:
+        ready, _, _ = select.select([fd], [], [], max(0.0, deadline - time.monotonic()))
+        if ready:
+            data += os.read(fd, count - len(data))
+    return data
 
 
 def test_serial_endpoint_with_explicit_settings_keeps_them(pty_pair: tuple[int, str]) -> None:
