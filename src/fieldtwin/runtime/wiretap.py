@@ -14,7 +14,7 @@ per block the line delivered.
 
 from __future__ import annotations
 
-from fieldtwin.clock import MS, SimClock
+from fieldtwin.clock import MS, Handle, SimClock
 from fieldtwin.errors import ProtocolError
 from fieldtwin.modbus.crc import crc_ok
 from fieldtwin.modbus.mbap import MbapDecoder
@@ -45,6 +45,7 @@ KIND_MODBUS = "modbus"
 KIND_SERIAL = "serial"
 IN, OUT = "in", "out"
 MAX_BLOCK = 1024  # characters of one SCM block an event carries (the count says the rest)
+BLOCK_GAP_US = 5 * MS  # a quieter line ends an SCM block (about 4 characters at 9600 Bd)
 MAX_PENDING = 256  # requests remembered per connection to pair their replies
 
 FUNCTION_NAMES = {
@@ -294,7 +295,13 @@ class Wiretap:
 
 
 class CharTap:
-    """Publishes the characters of one SCM channel, in and out, in blocks."""
+    """Publishes the characters of one SCM channel, in and out, in blocks.
+
+    A channel sends one character at a time; characters in the same direction
+    less than BLOCK_GAP_US apart make one block, published when the line has
+    been quiet that long in that direction (a clock event of the tap's own:
+    it only publishes), when the direction turns, or at MAX_BLOCK characters.
+    """
 
     def __init__(self, bus: EventBus, clock: SimClock, device: str, channel: int, line: str) -> None:
         self.bus = bus
@@ -302,6 +309,8 @@ class CharTap:
         self.device = device
         self.channel = channel
         self.line = line
+        self._blocks: dict[str, tuple[int, int, bytearray]] = {}  # dir -> (start, last, chars)
+        self._timers: dict[str, Handle] = {}
 
     @property
     def active(self) -> bool:
@@ -309,17 +318,41 @@ class CharTap:
 
     def chars(self, direction: str, data: bytes, now: int | None = None) -> None:
         t_us = self._clock.now if now is None else now
+        block = self._blocks.get(direction)
+        if block is not None and (t_us - block[1] > BLOCK_GAP_US or len(block[2]) >= MAX_BLOCK):
+            self.flush(direction)
+            block = None
+        if block is None:
+            block = (t_us, t_us, bytearray())
+        self._blocks[direction] = (block[0], t_us, block[2] + data)
+        timer = self._timers.pop(direction, None)
+        if timer is not None:
+            timer.cancel()
+        flush_at = max(t_us + BLOCK_GAP_US, self._clock.now)
+        self._timers[direction] = self._clock.schedule(
+            flush_at, lambda now, d=direction: self.flush(d)
+        )
+
+    def flush(self, direction: str) -> None:
+        """Publish the block waiting in ``direction`` (if any)."""
+        block = self._blocks.pop(direction, None)
+        timer = self._timers.pop(direction, None)
+        if timer is not None:
+            timer.cancel()
+        if block is None:
+            return
+        start, _, data = block
         fields: dict[str, object] = {
             "endpoint": self.line,
             "channel": self.channel,
             "dir": direction,
             "count": len(data),
-            "hex": data[:MAX_BLOCK].hex(),
-            "text": data[:MAX_BLOCK].decode("latin-1"),
+            "hex": bytes(data[:MAX_BLOCK]).hex(),
+            "text": bytes(data[:MAX_BLOCK]).decode("latin-1"),
         }
         if len(data) > MAX_BLOCK:
             fields["truncated"] = True
-        self.bus.publish(t_us, KIND_SERIAL, self.device, fields)
+        self.bus.publish(start, KIND_SERIAL, self.device, fields)
 
 
 __all__ = [
