@@ -25,12 +25,12 @@ from fieldtwin.devices.scm import ScmDevice
 from fieldtwin.devices.tes import GROUP as MODBUS
 from fieldtwin.devices.tes import TesDevice
 from fieldtwin.errors import ConfigError
-from fieldtwin.tsx.scm.endpoints import MemoryPeer
 from fieldtwin.runtime.events import EventBus
 from fieldtwin.runtime.modbus_server import ModbusServer
 from fieldtwin.runtime.runner import Runner
 from fieldtwin.runtime.wiretap import CharTap
 from fieldtwin.transports.url import parse_endpoint
+from fieldtwin.tsx.scm.endpoints import MemoryPeer
 
 ALL = (MODBUS, SERIAL_LINE)
 
