@@ -96,27 +96,26 @@ def _serve_modbus(
         binding.add([server.describe()], server.close)
 
 
-def _attach_channels(
-    devices: Sequence[Device], binding: Binding, events: EventBus | None
-) -> None:
+def _attach_channels(devices: Sequence[Device], binding: Binding, events: EventBus | None) -> None:
     for device in devices:
         if not isinstance(device, ScmDevice):
             continue
         for port in device.ports():
             binding.add(device.bind(port, None), _detacher(device, port))
-            if events is not None:
-                _tap_channel(device, port, events)
+        if events is not None:
+            _tap_channels(device, events)
 
 
-def _tap_channel(device: ScmDevice, port: Port, events: EventBus) -> None:
-    channel = int(port.name.split()[-1])
-    wired = device.scm.ports[channel]
-    if wired is None:
-        return
-    tap = CharTap(events, device.scm.ctx.clock, str(device.address), channel, port.endpoint)
-    wired.tap = tap
-    if isinstance(wired.peer, MemoryPeer):
-        wired.peer.tap = tap
+def _tap_channels(device: ScmDevice, events: EventBus) -> None:
+    """Every wired channel (memory ones were wired when the module was built)."""
+    for channel, wired in enumerate(device.scm.ports):
+        if wired is None:
+            continue
+        clock = device.scm.ctx.clock
+        tap = CharTap(events, clock, str(device.address), channel, wired.url.split("?")[0])
+        wired.tap = tap
+        if isinstance(wired.peer, MemoryPeer):
+            wired.peer.tap = tap
 
 
 def _detacher(device: ScmDevice, port: Port) -> Callable[[], None]:

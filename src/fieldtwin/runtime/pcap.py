@@ -105,7 +105,9 @@ class PcapWriter:
         self._conns: dict[tuple[str, str], _Connection] = {}
         self.packets = 0
         self.failed: str | None = None
-        self._sub: Subscription | None = bus.subscribe(("modbus",), maxlen=QUEUE, notify=self._drain)
+        self._sub: Subscription | None = bus.subscribe(
+            ("modbus",), maxlen=QUEUE, notify=self._drain
+        )
 
     def _drain(self) -> None:
         sub = self._sub

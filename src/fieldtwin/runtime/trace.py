@@ -133,7 +133,9 @@ def describe(item: Mapping[str, object]) -> str:
     direction = str(item.get("dir", "?"))
     if item.get("kind") == "serial":
         text = str(item.get("text", ""))
-        return f"{head} ch {item.get('channel')}  {direction:<3}  {item.get('count')} chars {text!r}"
+        return (
+            f"{head} ch {item.get('channel')}  {direction:<3}  {item.get('count')} chars {text!r}"
+        )
     if item.get("kind") != "modbus":
         return f"{head}  {item.get('kind')}"
     if "fault" in item:

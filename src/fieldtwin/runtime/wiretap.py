@@ -14,6 +14,8 @@ per block the line delivered.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from fieldtwin.clock import MS, Handle, SimClock
 from fieldtwin.errors import ProtocolError
 from fieldtwin.modbus.crc import crc_ok
@@ -225,7 +227,9 @@ class Stream:
         fields["from"] = device_name(device) if device is not None else "server"
         return fields
 
-    def _publish(self, t_us: int, direction: str, slave: int | None, fields: dict[str, object]) -> None:
+    def _publish(
+        self, t_us: int, direction: str, slave: int | None, fields: dict[str, object]
+    ) -> None:
         self.tap.publish(t_us, direction, slave, self.conn, fields)
 
 
@@ -303,7 +307,9 @@ class CharTap:
     it only publishes), when the direction turns, or at MAX_BLOCK characters.
     """
 
-    def __init__(self, bus: EventBus, clock: SimClock, device: str, channel: int, line: str) -> None:
+    def __init__(
+        self, bus: EventBus, clock: SimClock, device: str, channel: int, line: str
+    ) -> None:
         self.bus = bus
         self._clock = clock
         self.device = device
@@ -329,9 +335,10 @@ class CharTap:
         if timer is not None:
             timer.cancel()
         flush_at = max(t_us + BLOCK_GAP_US, self._clock.now)
-        self._timers[direction] = self._clock.schedule(
-            flush_at, lambda now, d=direction: self.flush(d)
-        )
+        self._timers[direction] = self._clock.schedule(flush_at, self._flusher(direction))
+
+    def _flusher(self, direction: str) -> Callable[[int], None]:
+        return lambda now: self.flush(direction)
 
     def flush(self, direction: str) -> None:
         """Publish the block waiting in ``direction`` (if any)."""
