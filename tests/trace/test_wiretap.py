@@ -167,3 +167,27 @@ def test_scm_characters_come_in_blocks() -> None:
         (0, "out", "HELLO", 5),
     ]
     assert got[0].kind == "serial" and got[0].device == "7"
+
+
+def test_a_scm_tcp_channel_remembers_a_bounded_number_of_peers() -> None:
+    from fieldtwin.tsx.scm.endpoints import MAX_CONNECTION_NAMES, Port, _connected
+
+    class Peer:
+        def __init__(self, name: str) -> None:
+            self.name, self.closed = name, False
+
+        def close(self) -> None:
+            self.closed = True
+
+    class Pacer:
+        def attach(self, transport: object, on_data: object) -> None:
+            pass
+
+        def detach(self, transport: object) -> None:
+            pass
+
+    port = Port("tcp://127.0.0.1:0", None, runner=Pacer())  # type: ignore[arg-type]
+    for i in range(1000):  # a peer that reconnects all day long
+        _connected(port, Peer(f"peer {i}"))
+    assert len(port.connections) == MAX_CONNECTION_NAMES
+    assert port.connections[-1] == "peer 999"
