@@ -1,4 +1,4 @@
-"""The `fieldtwin` command: run, console, tesis."""
+"""The `fieldtwin` command: run, console, trace, tesis."""
 
 from __future__ import annotations
 
@@ -16,6 +16,9 @@ from fieldtwin.errors import FieldtwinError
 
 if TYPE_CHECKING:
     from rich.live import Live
+
+    from fieldtwin.runtime.binder import Binding
+    from fieldtwin.runtime.events import EventBus
 
 SUPPRESS_SPEED: object = object()  # --speed not given: the plant's [run] speed decides
 
@@ -67,6 +70,8 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--status-every", type=_seconds, default=0.0, help="with --no-live: status every N sim. s"
     )
+    run.add_argument("--trace", metavar="FILE", help="write the traffic as JSON lines")
+    run.add_argument("--pcap", metavar="FILE", help="write the Modbus TCP traffic as a pcap")
     con = sub.add_parser("console", help="the programming terminal")
     con.add_argument("plant", nargs="?", help="plant file (TOML); default: the embedded plant")
     con.add_argument("--script", "-f", help="run commands from this file ('-' = stdin)")
@@ -80,6 +85,9 @@ def _parser() -> argparse.ArgumentParser:
         help="pacing while real endpoints exist: x1, x10, or max (default: [run] speed, else x1)",
     )
     sub.add_parser("tesis", help="the TES parameter workbench (fieldtwin tesis --help)")
+    from fieldtwin.tracecli import add_parser as add_trace_parser
+
+    add_trace_parser(sub)
     return parser
 
 
@@ -97,6 +105,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         if args.command == "run":
             return _run(args)
+        if args.command == "trace":
+            from fieldtwin.tracecli import run_trace
+
+            return run_trace(args)
         return _console(args)
     except FieldtwinError as exc:
         print(f"fieldtwin: {exc}", file=sys.stderr)
@@ -120,11 +132,13 @@ def _run(args: argparse.Namespace) -> int:
     runner = Runner(clock, speed)
     plant = build_plant(plant_file, runner=runner, speed=speed)
     try:
-        binding = bind(plant.devices, runner)  # every port, once the plant is built
+        recorders = _recorders(args, plant.events)  # before any port opens: no frame is missed
+        binding = bind(plant.devices, runner, events=plant.events)  # every port, once built
     except BaseException:
         plant.close()
         raise
     plant.bindings.append(binding)
+    plant.bindings.append(recorders)
     endpoints = binding.lines
     for line in endpoints:
         print(line, flush=True)
@@ -166,6 +180,27 @@ def _run(args: argparse.Namespace) -> int:
         print("\n".join(final), flush=True)
     print(f"stopped at t = {clock.now / S:.3f} s", flush=True)
     return 0
+
+
+def _recorders(args: argparse.Namespace, events: EventBus) -> Binding:
+    """The --trace and --pcap writers, closed (flushed) with the plant."""
+    from fieldtwin.runtime.binder import Binding
+    from fieldtwin.runtime.pcap import PcapWriter
+    from fieldtwin.runtime.trace import TraceWriter
+
+    def report(text: str) -> None:
+        print(f"fieldtwin: {text}", file=sys.stderr, flush=True)
+
+    recorders = Binding()
+    try:
+        if args.trace:
+            recorders.add([], TraceWriter(events, args.trace, report=report).close)
+        if args.pcap:
+            recorders.add([], PcapWriter(events, args.pcap, report=report).close)
+    except BaseException:
+        recorders.close()
+        raise
+    return recorders
 
 
 def _tick(speed: float | None) -> int:

@@ -24,6 +24,8 @@ from fieldtwin.console_syntax import (
     split_line,
     value_of,
 )
+from fieldtwin.console_trace import USAGE as TRACE_USAGE
+from fieldtwin.console_trace import ConsoleTrace
 from fieldtwin.devices.face import Device, ModuleAddress
 from fieldtwin.devices.tes import TesDevice
 from fieldtwin.errors import ConfigError, FieldtwinError
@@ -59,6 +61,7 @@ HELP = {
     "tes": "tes [ENDPOINT] SLAVE read ADDR [N] | peek ADDR [N] | write ADDR VALUE"
     " | input I VALUE | signal I KIND key=value... | fault NAME on|off | faults | status | leds"
     " | power-cycle",
+    "trace": f"{TRACE_USAGE}  the traffic on the wire; each advance shows its own",
     "help": "help [COMMAND]",
     "quit": "quit",
 }
@@ -82,6 +85,7 @@ class Console:
         self.plant = plant
         self.interrupted = interrupted
         self.progress = progress
+        self.trace = ConsoleTrace(plant.events)
         self._commands: dict[str, Callable[[list[str]], list[str]]] = {
             "read": self._read,
             "write": self._write,
@@ -100,6 +104,7 @@ class Console:
             "plc": self._plc_mode,
             "txt": self._txt,
             "tes": self._tes,
+            "trace": self.trace.command,
             "help": self._help,
         }
 
@@ -230,8 +235,8 @@ class Console:
                 self.plant.clock.advance(step)
             left -= step
             if left > 0 and self.interrupted():
-                return [f"interrupted  {self._time()}"]
-        return [self._time()]
+                return [f"interrupted  {self._time()}", *self.trace.pending()]
+        return [self._time(), *self.trace.pending()]
 
     # --- devices: one set of verbs for a module and a TES (the Device face) ----------
 

@@ -42,6 +42,7 @@ from fieldtwin.devices.module import ModuleDevice
 from fieldtwin.devices.schema import table_at
 from fieldtwin.devices.tes import TesDevice
 from fieldtwin.errors import ConfigError
+from fieldtwin.runtime.events import EventBus
 from fieldtwin.tes.model import Tes
 from fieldtwin.tsx.plc import MODELS, Plc
 
@@ -78,6 +79,7 @@ class Plant:
     speed: float | None = 1.0
     bindings: list[Binding] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)  # what devices said of the file's inputs
+    events: EventBus = field(default_factory=EventBus)  # what windows onto the plant observe
 
     # --- devices -----------------------------------------------------------
 
@@ -132,7 +134,7 @@ class Plant:
         """Open the TES Modbus endpoints; returns one 'listening: ...' line each."""
         from fieldtwin.runtime.binder import MODBUS, bind
 
-        binding = bind(self.devices, runner, groups=(MODBUS,))
+        binding = bind(self.devices, runner, groups=(MODBUS,), events=self.events)
         self.bindings.append(binding)
         return binding.lines
 
@@ -260,7 +262,9 @@ def load_plant(
 
     plant = build_plant(read_plant(path), clock=clock, runner=runner, speed=speed)
     try:
-        plant.bindings.append(bind(plant.devices, runner, groups=(SERIAL_LINE,)))
+        plant.bindings.append(
+            bind(plant.devices, runner, groups=(SERIAL_LINE,), events=plant.events)
+        )
     except BaseException:
         plant.close()
         raise

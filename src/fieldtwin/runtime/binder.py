@@ -9,7 +9,9 @@ belongs to a group that says how it is opened:
   SCM's endpoint functions (fieldtwin.tsx.scm.endpoints, through the module's
   ``attach``), pumped by the PLC's runner.
 
-``fieldtwin run`` binds every group; ``load_plant`` (and so the console) binds
+Given the plant's event bus, every port opened publishes its traffic on it
+(Modbus frames through the server's wiretap, SCM characters through the
+channel's port).  ``fieldtwin run`` binds every group; ``load_plant`` (and so the console) binds
 the ``scm`` group only, leaving the TES's Modbus endpoints closed.
 """
 
@@ -23,9 +25,12 @@ from fieldtwin.devices.scm import ScmDevice
 from fieldtwin.devices.tes import GROUP as MODBUS
 from fieldtwin.devices.tes import TesDevice
 from fieldtwin.errors import ConfigError
+from fieldtwin.runtime.events import EventBus
 from fieldtwin.runtime.modbus_server import ModbusServer
 from fieldtwin.runtime.runner import Runner
+from fieldtwin.runtime.wiretap import CharTap
 from fieldtwin.transports.url import parse_endpoint
+from fieldtwin.tsx.scm.endpoints import MemoryPeer
 
 ALL = (MODBUS, SERIAL_LINE)
 
@@ -48,22 +53,29 @@ class Binding:
 
 
 def bind(
-    devices: Sequence[Device], runner: Runner | None, *, groups: Collection[str] = ALL
+    devices: Sequence[Device],
+    runner: Runner | None,
+    *,
+    groups: Collection[str] = ALL,
+    events: EventBus | None = None,
 ) -> Binding:
-    """Open the ports of ``devices`` in ``groups`` (TES groups first, then SCM channels)."""
+    """Open the ports of ``devices`` in ``groups`` (TES groups first, then SCM channels);
+    with ``events``, their traffic is published there."""
     binding = Binding()
     try:
         if MODBUS in groups:
-            _serve_modbus(devices, runner, binding)
+            _serve_modbus(devices, runner, binding, events)
         if SERIAL_LINE in groups:
-            _attach_channels(devices, binding)
+            _attach_channels(devices, binding, events)
     except BaseException:
         binding.close()
         raise
     return binding
 
 
-def _serve_modbus(devices: Sequence[Device], runner: Runner | None, binding: Binding) -> None:
+def _serve_modbus(
+    devices: Sequence[Device], runner: Runner | None, binding: Binding, events: EventBus | None
+) -> None:
     from fieldtwin.runtime.tes_lines import serve_group
 
     lines: dict[str, list[TesDevice]] = {}
@@ -79,15 +91,31 @@ def _serve_modbus(devices: Sequence[Device], runner: Runner | None, binding: Bin
         server: ModbusServer = serve_group(
             runner, parse_endpoint(url), [d.tes for d in members], members[0].link
         )
+        if events is not None:
+            server.tap(events, url)
         binding.add([server.describe()], server.close)
 
 
-def _attach_channels(devices: Sequence[Device], binding: Binding) -> None:
+def _attach_channels(devices: Sequence[Device], binding: Binding, events: EventBus | None) -> None:
     for device in devices:
         if not isinstance(device, ScmDevice):
             continue
         for port in device.ports():
             binding.add(device.bind(port, None), _detacher(device, port))
+        if events is not None:
+            _tap_channels(device, events)
+
+
+def _tap_channels(device: ScmDevice, events: EventBus) -> None:
+    """Every wired channel (memory ones were wired when the module was built)."""
+    for channel, wired in enumerate(device.scm.ports):
+        if wired is None:
+            continue
+        clock = device.scm.ctx.clock
+        tap = CharTap(events, clock, str(device.address), channel, wired.url.split("?")[0])
+        wired.tap = tap
+        if isinstance(wired.peer, MemoryPeer):
+            wired.peer.tap = tap
 
 
 def _detacher(device: ScmDevice, port: Port) -> Callable[[], None]:

@@ -5,6 +5,10 @@ line on a pty, a serial port or a memory transport) and ``serve_rtu_over_tcp``
 (RTU frames inside TCP connections) attach the cores to a ``Runner``.  Each
 core says when it next needs the clock (``next_deadline``); one clock event per
 core wakes it then, and replies are sent the instant they are due.
+
+``ModbusServer.tap(bus, endpoint)`` publishes every frame in and out on the
+plant's event bus (fieldtwin.runtime.wiretap); a pump checks ``bus.active``
+first, so an unobserved server pays one attribute read per chunk.
 """
 
 from __future__ import annotations
@@ -20,7 +24,9 @@ from fieldtwin.modbus.rtu import MAX_FRAME
 from fieldtwin.modbus.session import TcpSession
 from fieldtwin.modbus.slave import SlaveSet, Transmission
 from fieldtwin.modbus.timing import RtuTiming
+from fieldtwin.runtime.events import EventBus
 from fieldtwin.runtime.runner import Runner
+from fieldtwin.runtime.wiretap import Stream, Wiretap
 from fieldtwin.transports.base import LineSettings, Listener, Transport
 from fieldtwin.transports.tcp import listener_url
 
@@ -49,18 +55,30 @@ class _Pump:
         runner: Runner,
         transport: Transport,
         core: Core,
-        served: dict[int, _Pump] | None = None,
+        server: ModbusServer | None = None,
     ) -> None:
         self.runner = runner
         self.transport = transport
         self.core = core
         self._timer: Handle | None = None
-        self._served = served  # the server's open pumps: this one leaves it on close
-        if served is not None:
-            served[id(self)] = self
+        self._server = server  # its open pumps: this one leaves them on close
+        self._stream: Stream | None = None  # the wiretap's decoder, made when first observed
+        if server is not None:
+            server.pumps[id(self)] = self
         runner.attach(transport, self.on_data, self.on_close)
 
+    def _observed(self) -> Stream | None:
+        server = self._server
+        if server is None or server.wiretap is None or not server.wiretap.bus.active:
+            return None
+        if self._stream is None:
+            self._stream = server.wiretap.stream(_conn_name(self.transport))
+        return self._stream
+
     def on_data(self, data: bytes, now: int) -> None:
+        stream = self._observed()
+        if stream is not None:
+            stream.inbound(data, now)  # before the core: the TES's state as the request meets it
         self.core.receive(data, now)
         self._flush(now)
 
@@ -68,8 +86,8 @@ class _Pump:
         self.close()
 
     def close(self) -> None:
-        if self._served is not None:
-            self._served.pop(id(self), None)
+        if self._server is not None:
+            self._server.pumps.pop(id(self), None)
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
@@ -82,9 +100,14 @@ class _Pump:
         self._flush(now)
 
     def _flush(self, now: int) -> None:
+        stream = self._observed()
         try:
+            if stream is not None:
+                stream.poll(now)
             for transmission in self.core.poll(now):
                 self.transport.send(transmission.data)
+                if stream is not None:
+                    stream.outbound(transmission.data, now)
         except TransportError:
             self.close()
             return
@@ -101,6 +124,12 @@ class _Pump:
         if timer is not None:
             timer.cancel()
         self._timer = None if deadline is None else self.runner.clock.schedule(deadline, self._wake)
+
+
+def _conn_name(transport: Transport) -> str:
+    """The peer of a connection (``127.0.0.1:50412``), or the line's path."""
+    name = transport.peer_path or transport.name
+    return name.rsplit(" <- ", 1)[-1]
 
 
 def url_of(scheme: str, listener: Listener) -> str:
@@ -134,6 +163,7 @@ class ModbusServer:
         slaves: SlaveSet,
         line: str = "",
         listener: Listener | None = None,
+        timing: RtuTiming | None = None,
     ) -> None:
         self.runner = runner
         self.kind = kind
@@ -144,6 +174,13 @@ class ModbusServer:
         # open transports served, by id: a pump leaves on close, so churn never grows it
         self.pumps: dict[int, _Pump] = {}
         self.closed = False
+        self.wiretap: Wiretap | None = None
+        self._timing = timing  # the RTU framing a wiretap copies (None: MBAP)
+
+    def tap(self, bus: EventBus, endpoint: str) -> None:
+        """Publish every frame in and out on ``bus``, naming ``endpoint`` (as the plant does)."""
+        transport = {"modbus-tcp": "tcp", "modbus-rtu-over-tcp": "rtu+tcp"}.get(self.kind, "rtu")
+        self.wiretap = Wiretap(bus, endpoint, transport, self.slaves, self._timing, self.where)
 
     def describe(self) -> str:
         """One line: ``listening: modbus-tcp tcp://127.0.0.1:5020 slaves 1,2``."""
@@ -174,7 +211,7 @@ def serve_tcp(
     server = ModbusServer(runner, "modbus-tcp", url_of("tcp", listener), slaves, listener=listener)
 
     def on_connect(transport: Transport, now: int) -> None:
-        _Pump(runner, transport, TcpSession(slaves), server.pumps)
+        _Pump(runner, transport, TcpSession(slaves), server)
 
     runner.attach_listener(listener, on_connect)
     return server
@@ -195,8 +232,8 @@ def serve_rtu(
         timing = timing.relaxed(floor, eager=True, max_lead_us=_max_lead(timing))
     line = RtuLine(devices, link, timing, wiring)
     where = f"pty {transport.peer_path}" if transport.peer_path else transport.name
-    server = ModbusServer(runner, "modbus-rtu", where, line.slaves, str(settings))
-    _Pump(runner, transport, line, server.pumps)
+    server = ModbusServer(runner, "modbus-rtu", where, line.slaves, str(settings), timing=timing)
+    _Pump(runner, transport, line, server)
     return server
 
 
@@ -215,10 +252,12 @@ def serve_rtu_over_tcp(
     floor = _scaled(runner, TCP_STREAM_FLOOR_US)
     timing = timing.relaxed(floor, eager=True, max_lead_us=_max_lead(timing))
     where = url_of("rtu+tcp", listener)
-    server = ModbusServer(runner, "modbus-rtu-over-tcp", where, slaves, str(settings), listener)
+    server = ModbusServer(
+        runner, "modbus-rtu-over-tcp", where, slaves, str(settings), listener, timing
+    )
 
     def on_connect(transport: Transport, now: int) -> None:
-        _Pump(runner, transport, RtuLine(devices, link, timing, wiring), server.pumps)
+        _Pump(runner, transport, RtuLine(devices, link, timing, wiring), server)
 
     runner.attach_listener(listener, on_connect)
     return server

@@ -162,6 +162,11 @@ class LineFaults:
         queue = self._queued[state.link_key(link)]
         return queue.popleft() if queue else self.corrupt
 
+    def pending(self, link: Link) -> state.LineFault | None:
+        """What ``take`` would give, without taking it (for the wire trace)."""
+        queue = self._queued[state.link_key(link)]
+        return queue[0] if queue else self.corrupt
+
     def set_not_ready(self, on: bool, count: int | None, window_us: int | None) -> None:
         self.not_ready_always = on and count is None and window_us is None
         self.not_ready_left = (count or 0) if on else 0

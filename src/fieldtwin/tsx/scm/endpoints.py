@@ -9,13 +9,25 @@ by the PLC's runner, which then paces simulated time to the wall clock.
 from __future__ import annotations
 
 import contextlib
+from collections import deque
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 from fieldtwin.charformat import CharFormat, Parity
 from fieldtwin.clock import SimClock
 from fieldtwin.errors import ConfigError, TransportError
 from fieldtwin.tsx.scm.line import Line
+
+MAX_CONNECTION_NAMES = 16  # the last TCP peers a channel remembers (DESIGN rule 14)
+
+
+class CharTap(Protocol):
+    """Who publishes a channel's characters (fieldtwin.runtime.wiretap.CharTap)."""
+
+    @property
+    def active(self) -> bool: ...
+
+    def chars(self, direction: str, data: bytes, now: int | None = None) -> None: ...
 
 
 class MemoryPeer:
@@ -33,6 +45,7 @@ class MemoryPeer:
         self._clock = clock
         self._line = line
         self._inbox = bytearray()
+        self.tap: CharTap | None = None  # the plant's event bus, when the binder gave one
 
     def set_format(
         self, data_bits: int = 8, parity: str = "N", stop_bits: int = 1, baud: int | None = None
@@ -46,6 +59,8 @@ class MemoryPeer:
         """Characters typed by the peer now (simulated time); they arrive at the peer's pace."""
         if self.closed:
             raise TransportError("cannot send on the memory peer: it is closed")
+        if self.tap is not None and self.tap.active:
+            self.tap.chars("in", bytes(data))
         self._line.feed(bytes(data), self._clock.now, self.format, peer_speed=self.baud is not None)
 
     def receive(self) -> bytes:
@@ -75,9 +90,10 @@ class Port:
     listener: Any = None
     runner: Any = None
     path: str | None = None
-    connections: list[str] = field(default_factory=list)
+    connections: deque[str] = field(default_factory=lambda: deque(maxlen=MAX_CONNECTION_NAMES))
     settings_given: bool = False  # the URL fixed baud/parity/data/stop: never follow
     follow_error: str | None = None
+    tap: CharTap | None = None  # the plant's event bus, when the binder gave one
 
     def follow(self, fmt: CharFormat) -> None:
         """Set a host serial port to the channel's configured format and speed (SCM 3.2).
@@ -111,6 +127,8 @@ class Port:
         return self.url
 
     def send(self, data: bytes) -> None:
+        if self.tap is not None and self.tap.active:
+            self.tap.chars("out", data)
         peer = self.peer
         if isinstance(peer, MemoryPeer):
             peer.from_module(data)
@@ -121,6 +139,8 @@ class Port:
             peer.send(data)
 
     def feed(self, data: bytes, now: int) -> None:
+        if self.tap is not None and self.tap.active:
+            self.tap.chars("in", data, now)
         self.line.feed(data, now)
 
     def close(self) -> None:

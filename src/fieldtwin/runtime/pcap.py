@@ -1,0 +1,198 @@
+"""The Modbus/TCP and RTU-over-TCP traffic as a pcap file (Wireshark, tshark).
+
+``PcapWriter`` subscribes to the ``modbus`` events of the plant's bus and
+writes each frame that travelled over TCP as an Ethernet/IPv4/TCP packet built
+with dpkt (docs/decisions.md): per connection, a three-way handshake the first
+time it is seen, then sequence and acknowledgement numbers that follow the
+bytes each side sent, so that a dissector reassembles the stream.  The frames
+are the bytes that crossed the socket (``hex`` of the event); packet times are
+the simulated time plus the wall-clock instant the writer started.  RTU on a
+pty or a serial line has no TCP to show: it goes to the JSON trace only.
+Errors: as the trace writer (reported once, the capture stops, the plant runs).
+"""
+
+from __future__ import annotations
+
+import ipaddress
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import BinaryIO
+from urllib.parse import urlsplit
+
+import dpkt
+
+from fieldtwin.errors import ConfigError
+from fieldtwin.runtime.events import Event, EventBus, Subscription
+
+TCP_TRANSPORTS = ("tcp", "rtu+tcp")
+QUEUE = 10_000
+MAX_CONNECTIONS = 4096  # connections whose sequence numbers are remembered (oldest forgotten)
+SERVER_MAC = bytes.fromhex("020000000001")  # locally administered addresses
+CLIENT_MAC = bytes.fromhex("020000000002")
+FALLBACK_SERVER = "127.0.0.1"  # an IPv6 or named host is written as this IPv4 address
+FALLBACK_CLIENT = "127.0.0.2"
+WINDOW = 65535
+ISN_SERVER = 1_000_000  # initial sequence numbers (any fixed value: the trace is reproducible)
+ISN_CLIENT = 2_000_000
+
+Report = Callable[[str], None]
+
+
+def _ipv4(host: str, fallback: str) -> bytes:
+    try:
+        return ipaddress.IPv4Address(host.strip("[]")).packed
+    except ValueError:
+        return ipaddress.IPv4Address(fallback).packed
+
+
+def split_hostport(text: str) -> tuple[str, int]:
+    """``127.0.0.1:502`` or ``[::1]:502`` or ``tcp://host:port`` -> (host, port)."""
+    parts = urlsplit(text if "://" in text else f"x://{text}")
+    return parts.hostname or "", parts.port or 0
+
+
+@dataclass(slots=True)
+class _Connection:
+    server: tuple[bytes, int]
+    client: tuple[bytes, int]
+    server_seq: int = ISN_SERVER + 1
+    client_seq: int = ISN_CLIENT + 1
+
+
+def tcp_packet(
+    src: tuple[bytes, int],
+    dst: tuple[bytes, int],
+    seq: int,
+    ack: int,
+    flags: int,
+    data: bytes,
+    to_server: bool = True,
+) -> bytes:
+    """One Ethernet/IPv4/TCP frame (lengths and checksums computed by dpkt)."""
+    segment = dpkt.tcp.TCP(
+        sport=src[1], dport=dst[1], seq=seq, ack=ack, flags=flags, win=WINDOW, data=data
+    )
+    packet = dpkt.ip.IP(src=src[0], dst=dst[0], p=dpkt.ip.IP_PROTO_TCP, ttl=64, data=segment)
+    macs = (CLIENT_MAC, SERVER_MAC) if to_server else (SERVER_MAC, CLIENT_MAC)
+    frame = dpkt.ethernet.Ethernet(
+        src=macs[0], dst=macs[1], type=dpkt.ethernet.ETH_TYPE_IP, data=packet
+    )
+    return bytes(frame)
+
+
+class PcapWriter:
+    """Writes the TCP-borne Modbus frames published on ``bus`` to ``path``."""
+
+    def __init__(
+        self,
+        bus: EventBus,
+        path: str | Path,
+        *,
+        report: Report | None = None,
+        start_wall: float | None = None,
+    ) -> None:
+        self.path = Path(path)
+        try:
+            raw: BinaryIO = open(self.path, "wb")  # noqa: SIM115
+        except OSError as exc:
+            raise ConfigError(f"--pcap {path}: cannot write it ({exc.strerror})") from None
+        self._raw: BinaryIO | None = raw
+        self._pcap = dpkt.pcap.Writer(raw, linktype=dpkt.pcap.DLT_EN10MB)
+        self._report = report or (lambda text: None)
+        self._start = time.time() if start_wall is None else start_wall
+        self._conns: dict[tuple[str, str], _Connection] = {}
+        self.packets = 0
+        self.failed: str | None = None
+        self._sub: Subscription | None = bus.subscribe(
+            ("modbus",), maxlen=QUEUE, notify=self._drain
+        )
+
+    def _drain(self) -> None:
+        sub = self._sub
+        if sub is None:
+            return
+        try:
+            for event in sub.take():
+                self._event(event)
+        except (OSError, ValueError) as exc:
+            self._fail(f"pcap {self.path}: {getattr(exc, 'strerror', None) or exc}")
+
+    def _event(self, event: Event) -> None:
+        data = event.data
+        if data.get("transport") not in TCP_TRANSPORTS or "hex" not in data:
+            return
+        payload = bytes.fromhex(str(data["hex"]))
+        ts = self._start + event.t_us / 1e6
+        conn = self._connection(str(data.get("listen", "")), str(data.get("conn", "")), ts)
+        push = dpkt.tcp.TH_PUSH | dpkt.tcp.TH_ACK
+        if data.get("dir") == "in":
+            self._packet(ts, conn, True, conn.client_seq, conn.server_seq, push, payload)
+            conn.client_seq += len(payload)
+        else:
+            self._packet(ts, conn, False, conn.server_seq, conn.client_seq, push, payload)
+            conn.server_seq += len(payload)
+
+    def _connection(self, listen: str, peer: str, ts: float) -> _Connection:
+        key = (listen, peer)
+        conn = self._conns.get(key)
+        if conn is not None:
+            return conn
+        if len(self._conns) >= MAX_CONNECTIONS:
+            self._conns.pop(next(iter(self._conns)))
+        server_host, server_port = split_hostport(listen)
+        client_host, client_port = split_hostport(peer)
+        conn = _Connection(
+            (_ipv4(server_host, FALLBACK_SERVER), server_port),
+            (_ipv4(client_host, FALLBACK_CLIENT), client_port),
+        )
+        self._conns[key] = conn
+        syn, ack = dpkt.tcp.TH_SYN, dpkt.tcp.TH_ACK
+        self._packet(ts, conn, True, ISN_CLIENT, 0, syn, b"")
+        self._packet(ts, conn, False, ISN_SERVER, ISN_CLIENT + 1, syn | ack, b"")
+        self._packet(ts, conn, True, ISN_CLIENT + 1, ISN_SERVER + 1, ack, b"")
+        return conn
+
+    def _packet(
+        self,
+        ts: float,
+        conn: _Connection,
+        from_client: bool,
+        seq: int,
+        ack: int,
+        flags: int,
+        payload: bytes,
+    ) -> None:
+        src, dst = (conn.client, conn.server) if from_client else (conn.server, conn.client)
+        seq, ack = seq & 0xFFFFFFFF, ack & 0xFFFFFFFF
+        frame = tcp_packet(src, dst, seq, ack, flags, payload, to_server=from_client)
+        self._pcap.writepkt(frame, ts=ts)
+        self.packets += 1
+
+    def _fail(self, why: str) -> None:
+        self.failed = why
+        self._report(f"{why}: the capture stopped, the plant keeps running")
+        self._stop()
+
+    def _stop(self) -> None:
+        if self._sub is not None:
+            self._sub.close()
+            self._sub = None
+        raw, self._raw = self._raw, None
+        if raw is not None:
+            try:
+                raw.close()
+            except (OSError, ValueError) as exc:
+                if self.failed is None:
+                    self.failed = f"pcap {self.path}: {exc}"
+                    self._report(f"{self.failed}: the end of the capture is lost")
+
+    def close(self) -> None:
+        """Write what is left and close the file (idempotent)."""
+        if self._sub is not None:
+            self._drain()
+        self._stop()
+
+
+__all__ = ["PcapWriter", "split_hostport", "tcp_packet"]

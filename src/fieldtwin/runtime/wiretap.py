@@ -1,0 +1,377 @@
+"""What goes over the wire, decoded and published on the plant's event bus.
+
+A ``Wiretap`` belongs to one Modbus server; the server's pump hands it every
+chunk that arrived and every transmission it sent, *before* the core sees the
+chunk (so that the state of each TES, powered or given a fault, is the one the
+request meets).  It decodes on its own copy of the framing (an MBAP decoder per
+TCP connection, an RTU framer with the core's own timing per RTU stream), so it
+never changes what the core does.  The pump asks ``bus.active`` first: an
+unobserved plant pays one attribute read per chunk.
+
+``CharTap`` publishes the characters of an SCM channel in and out, one event
+per block the line delivered.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from fieldtwin.clock import MS, Handle, SimClock
+from fieldtwin.errors import ProtocolError
+from fieldtwin.modbus.crc import crc_ok
+from fieldtwin.modbus.mbap import MbapDecoder
+from fieldtwin.modbus.model import (
+    Link,
+    ReadBits,
+    ReadExceptionStatus,
+    ReadWords,
+    SlaveDevice,
+    WriteBit,
+    WriteBits,
+    WriteWord,
+    WriteWords,
+)
+from fieldtwin.modbus.pdu import (
+    EXCEPTION_FLAG,
+    WRITE_FUNCTIONS,
+    Rejection,
+    decode_request,
+    request_length,
+)
+from fieldtwin.modbus.rtu import Fault, Frame, RtuFramer
+from fieldtwin.modbus.slave import BROADCAST, SlaveSet
+from fieldtwin.modbus.timing import RtuTiming
+from fieldtwin.runtime.events import EventBus
+
+KIND_MODBUS = "modbus"
+KIND_SERIAL = "serial"
+IN, OUT = "in", "out"
+MAX_BLOCK = 1024  # characters of one SCM block an event carries (the count says the rest)
+BLOCK_GAP_US = 5 * MS  # a quieter line ends an SCM block (about 4 characters at 9600 Bd)
+MAX_PENDING = 256  # requests remembered per connection to pair their replies
+
+FUNCTION_NAMES = {
+    0x01: "read_coils",
+    0x02: "read_discrete_inputs",
+    0x03: "read_holding_registers",
+    0x04: "read_input_registers",
+    0x05: "write_single_coil",
+    0x06: "write_single_register",
+    0x07: "read_exception_status",
+    0x08: "diagnostics",
+    0x0F: "write_multiple_coils",
+    0x10: "write_multiple_registers",
+}
+
+# What a TES does with a request, as the trace says it (docs/trace.md).
+ANSWERS = "answers"
+NOT_ADDRESSED = "not_addressed"
+POWERED_OFF = "powered_off"
+NO_ANSWER = "no_answer"
+BROADCAST_EXECUTED = "broadcast"
+BROADCAST_IGNORED = "broadcast_ignored"  # AMB-TES-29: a broadcast read
+
+
+def function_name(function: int) -> str:
+    base = FUNCTION_NAMES.get(function & 0x7F, f"function_{function & 0x7F:02x}")
+    return f"{base}_exception" if function & EXCEPTION_FLAG else base
+
+
+def request_fields(pdu: bytes) -> dict[str, object]:
+    """Function, address and count of a request PDU (what the slave core decodes)."""
+    if not pdu:
+        return {"function": None, "function_name": "empty"}
+    out: dict[str, object] = {"function": pdu[0], "function_name": function_name(pdu[0])}
+    request = decode_request(pdu)
+    if isinstance(request, Rejection):
+        out["rejected"] = int(request.code)
+        out["reason"] = request.reason
+    elif isinstance(request, ReadBits | ReadWords):
+        out["address"], out["count"] = request.address, request.count
+    elif isinstance(request, WriteBit | WriteWord):
+        out["address"], out["count"] = request.address, 1
+    elif isinstance(request, WriteBits | WriteWords):
+        out["address"], out["count"] = request.address, len(request.values)
+    else:
+        assert isinstance(request, ReadExceptionStatus)
+    return out
+
+
+def reply_fields(pdu: bytes) -> dict[str, object]:
+    """Function and exception code of a reply PDU."""
+    if not pdu:
+        return {"function": None, "function_name": "empty"}
+    out: dict[str, object] = {"function": pdu[0] & 0x7F, "function_name": function_name(pdu[0])}
+    if pdu[0] & EXCEPTION_FLAG and len(pdu) > 1:
+        out["exception"] = pdu[1]
+    return out
+
+
+def device_name(device: SlaveDevice) -> str:
+    return str(getattr(device, "name", f"slave {device.slave}"))
+
+
+def outcome(device: SlaveDevice, link: Link, rtu: bool) -> str:
+    """What ``device`` will do with a request addressed to it, read from its state now."""
+    if not getattr(device, "powered", True):
+        return POWERED_OFF
+    faults = getattr(device, "line_faults", None)
+    if faults is not None and faults.no_answer:
+        return NO_ANSWER
+    if rtu and faults is not None:
+        pending = faults.pending(link)  # the RTU line will corrupt this frame
+        if pending is not None:
+            return str(pending.value)
+    return ANSWERS
+
+
+def _late_ms(device: SlaveDevice, link: Link) -> float:
+    return device.answer_delay(link) / MS
+
+
+class Stream:
+    """The tap on one transport (a TCP connection or an RTU line)."""
+
+    def __init__(self, tap: Wiretap, conn: str) -> None:
+        self.tap = tap
+        self.conn = conn
+        self._mbap = MbapDecoder()
+        self._framer = RtuFramer(tap.timing, request_length) if tap.timing is not None else None
+        self._pending: dict[int, dict[str, object]] = {}  # transaction or slave -> request
+
+    # -- the pump's calls ------------------------------------------------------------
+
+    def inbound(self, data: bytes, now: int) -> None:
+        if self._framer is None:
+            self._tcp_in(data, now)
+        else:
+            self._rtu_events(self._framer.receive(data, now), now)
+
+    def poll(self, now: int) -> None:
+        if self._framer is not None:
+            self._rtu_events(self._framer.poll(now), now)
+
+    def outbound(self, data: bytes, now: int) -> None:
+        if self._framer is None:
+            self._tcp_out(data, now)
+        else:
+            self._rtu_out(data, now)
+
+    # -- Modbus TCP ------------------------------------------------------------------
+
+    def _tcp_in(self, data: bytes, now: int) -> None:
+        try:
+            frames = self._mbap.feed(data)
+        except ProtocolError as exc:
+            self._mbap = MbapDecoder()
+            self._publish(now, IN, None, {"error": str(exc), "hex": data[:260].hex()})
+            return
+        for frame in frames:
+            raw = _mbap_bytes(frame.transaction, frame.protocol, frame.unit, frame.pdu)
+            fields: dict[str, object] = {"transaction": frame.transaction, "hex": raw.hex()}
+            fields.update(request_fields(frame.pdu))
+            fields["tes"] = self.tap.outcomes(frame.unit, frame.pdu, rtu=False)
+            self._remember(frame.transaction, frame.unit, fields)
+            self._publish(now, IN, frame.unit, fields)
+
+    def _tcp_out(self, data: bytes, now: int) -> None:
+        if len(data) < 8:
+            return
+        transaction, unit, pdu = (data[0] << 8) | data[1], data[6], data[7:]
+        fields: dict[str, object] = {"transaction": transaction, "hex": data.hex()}
+        fields.update(self._reply(transaction, unit, pdu))
+        self._publish(now, OUT, unit, fields)
+
+    # -- Modbus RTU ------------------------------------------------------------------
+
+    def _rtu_events(self, events: list[Frame | Fault], now: int) -> None:
+        for event in events:
+            if isinstance(event, Fault):
+                fields: dict[str, object] = {
+                    "crc": "bad" if event.counter.value == "crc_errors" else None,
+                    "fault": event.counter.value,
+                    "fault_count": event.count,
+                }
+                self._publish(event.at, IN, None, fields)
+                continue
+            slave, pdu = event.slave, event.pdu
+            fields = {"crc": "good", "hex": event.data.hex()}
+            fields.update(request_fields(pdu))
+            fields["tes"] = self.tap.outcomes(slave, pdu, rtu=True)
+            self._remember(slave, slave, fields)
+            self._publish(event.at, IN, slave, fields)
+
+    def _rtu_out(self, data: bytes, now: int) -> None:
+        if len(data) < 4:
+            return
+        slave = data[0]
+        fields: dict[str, object] = {"crc": "good" if crc_ok(data) else "bad", "hex": data.hex()}
+        fields.update(self._reply(slave, slave, data[1:-2]))
+        self._publish(now, OUT, slave, fields)
+
+    # -- both ------------------------------------------------------------------------
+
+    def _remember(self, key: int, unit: int, fields: dict[str, object]) -> None:
+        if len(self._pending) >= MAX_PENDING:
+            self._pending.pop(next(iter(self._pending)))
+        self._pending[key] = {"unit": unit, **fields}
+
+    def _reply(self, key: int, unit: int, pdu: bytes) -> dict[str, object]:
+        fields = reply_fields(pdu)
+        request = self._pending.pop(key, None)
+        if request is not None:
+            for name in ("address", "count"):
+                if name in request:
+                    fields[name] = request[name]
+        device = self.tap.slaves.get(unit)
+        fields["from"] = device_name(device) if device is not None else "server"
+        return fields
+
+    def _publish(
+        self, t_us: int, direction: str, slave: int | None, fields: dict[str, object]
+    ) -> None:
+        self.tap.publish(t_us, direction, slave, self.conn, fields)
+
+
+def _mbap_bytes(transaction: int, protocol: int, unit: int, pdu: bytes) -> bytes:
+    head = transaction.to_bytes(2, "big") + protocol.to_bytes(2, "big")
+    return head + (len(pdu) + 1).to_bytes(2, "big") + bytes((unit,)) + pdu
+
+
+class Wiretap:
+    """Decodes and publishes the frames of one Modbus server."""
+
+    def __init__(
+        self,
+        bus: EventBus,
+        endpoint: str,
+        transport: str,
+        slaves: SlaveSet,
+        timing: RtuTiming | None,
+        where: str = "",
+    ) -> None:
+        self.bus = bus
+        self.endpoint = endpoint  # as the plant file names it
+        self.where = where  # where it listens (the port a port 0 got), or the pty
+        self.transport = transport  # "tcp", "rtu+tcp", "rtu"
+        self.slaves = slaves
+        self.timing = timing  # None: MBAP framing
+
+    def stream(self, conn: str) -> Stream:
+        return Stream(self, conn)
+
+    def outcomes(self, unit: int, pdu: bytes, rtu: bool) -> dict[str, str]:
+        """What each TES behind this server does with the request, by TES name."""
+        link = self.slaves.link
+        out: dict[str, str] = {}
+        for device in self.slaves.devices:
+            number = self.slaves.number_of(device)
+            if unit == BROADCAST:
+                state = outcome(device, link, rtu)
+                writes = bool(pdu) and pdu[0] in WRITE_FUNCTIONS
+                if state == ANSWERS:
+                    state = BROADCAST_EXECUTED if writes else BROADCAST_IGNORED
+                out[device_name(device)] = state
+            elif number == unit or (not rtu and unit == 0xFF and len(self.slaves.devices) == 1):
+                state = outcome(device, link, rtu)
+                if state == ANSWERS and device.answer_delay(link):
+                    state = f"{ANSWERS} after {_late_ms(device, link):g} ms"
+                out[device_name(device)] = state
+            else:
+                out[device_name(device)] = NOT_ADDRESSED
+        return out
+
+    def publish(
+        self, t_us: int, direction: str, slave: int | None, conn: str, fields: dict[str, object]
+    ) -> None:
+        data: dict[str, object] = {
+            "endpoint": self.endpoint,
+            "transport": self.transport,
+            "listen": self.where,
+            "conn": conn,
+            "dir": direction,
+            "slave": slave,
+            **fields,
+        }
+        known = slave is not None and self.slaves.get(slave) is not None
+        device = f"{self.endpoint} {slave}" if known else self.endpoint
+        self.bus.publish(t_us, KIND_MODBUS, device, data)
+
+
+class CharTap:
+    """Publishes the characters of one SCM channel, in and out, in blocks.
+
+    A channel sends one character at a time; characters in the same direction
+    less than BLOCK_GAP_US apart make one block, published when the line has
+    been quiet that long in that direction (a clock event of the tap's own:
+    it only publishes), when the direction turns, or at MAX_BLOCK characters.
+    """
+
+    def __init__(
+        self, bus: EventBus, clock: SimClock, device: str, channel: int, line: str
+    ) -> None:
+        self.bus = bus
+        self._clock = clock
+        self.device = device
+        self.channel = channel
+        self.line = line
+        self._blocks: dict[str, tuple[int, int, bytearray]] = {}  # dir -> (start, last, chars)
+        self._timers: dict[str, Handle] = {}
+
+    @property
+    def active(self) -> bool:
+        return self.bus.active
+
+    def chars(self, direction: str, data: bytes, now: int | None = None) -> None:
+        t_us = self._clock.now if now is None else now
+        block = self._blocks.get(direction)
+        if block is not None and (t_us - block[1] > BLOCK_GAP_US or len(block[2]) >= MAX_BLOCK):
+            self.flush(direction)
+            block = None
+        if block is None:
+            block = (t_us, t_us, bytearray())
+        self._blocks[direction] = (block[0], t_us, block[2] + data)
+        timer = self._timers.pop(direction, None)
+        if timer is not None:
+            timer.cancel()
+        flush_at = max(t_us + BLOCK_GAP_US, self._clock.now)
+        self._timers[direction] = self._clock.schedule(flush_at, self._flusher(direction))
+
+    def _flusher(self, direction: str) -> Callable[[int], None]:
+        return lambda now: self.flush(direction)
+
+    def flush(self, direction: str) -> None:
+        """Publish the block waiting in ``direction`` (if any)."""
+        block = self._blocks.pop(direction, None)
+        timer = self._timers.pop(direction, None)
+        if timer is not None:
+            timer.cancel()
+        if block is None:
+            return
+        start, _, data = block
+        fields: dict[str, object] = {
+            "endpoint": self.line,
+            "channel": self.channel,
+            "dir": direction,
+            "count": len(data),
+            "hex": bytes(data[:MAX_BLOCK]).hex(),
+            "text": bytes(data[:MAX_BLOCK]).decode("latin-1"),
+        }
+        if len(data) > MAX_BLOCK:
+            fields["truncated"] = True
+        self.bus.publish(start, KIND_SERIAL, self.device, fields)
+
+
+__all__ = [
+    "ANSWERS",
+    "KIND_MODBUS",
+    "KIND_SERIAL",
+    "NOT_ADDRESSED",
+    "CharTap",
+    "Stream",
+    "Wiretap",
+    "function_name",
+    "outcome",
+    "reply_fields",
+    "request_fields",
+]
