@@ -17,6 +17,10 @@ from fieldtwin.errors import FieldtwinError
 if TYPE_CHECKING:
     from rich.live import Live
 
+    from fieldtwin.control.launch import Launched
+    from fieldtwin.plant import Plant
+    from fieldtwin.runtime.runner import Runner
+
 SUPPRESS_SPEED: object = object()  # --speed not given: the plant's [run] speed decides
 
 
@@ -61,6 +65,7 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--status-every", type=_seconds, default=0.0, help="with --no-live: status every N sim. s"
     )
+    _control_options(run)
     con = sub.add_parser("console", help="the programming terminal")
     con.add_argument("plant", nargs="?", help="plant file (TOML); default: the embedded plant")
     con.add_argument("--script", "-f", help="run commands from this file ('-' = stdin)")
@@ -73,8 +78,38 @@ def _parser() -> argparse.ArgumentParser:
         default=SUPPRESS_SPEED,
         help="pacing while real endpoints exist: x1, x10, or max (default: [run] speed, else x1)",
     )
+    con.add_argument(
+        "--attach",
+        metavar="URL",
+        help="run the commands on the plant `fieldtwin run` serves at URL (docs/control.md)",
+    )
+    con.add_argument("--token", help="with --attach: the control token the run printed")
     sub.add_parser("tesis", help="the TES parameter workbench (fieldtwin tesis --help)")
     return parser
+
+
+def _port(text: str) -> int:
+    if not text.isdigit() or not 0 <= int(text) <= 65535:
+        raise argparse.ArgumentTypeError(f"{text!r}: a TCP port 0..65535 (0 = any free port)")
+    return int(text)
+
+
+def _control_options(run: argparse.ArgumentParser) -> None:
+    run.add_argument(
+        "--control-port",
+        type=_port,
+        default=None,
+        help="the control API's port (default 8520, or any free one if busy; 0 = any free)",
+    )
+    run.add_argument("--no-control", action="store_true", help="no control API")
+    run.add_argument(
+        "--control-host",
+        default="127.0.0.1",
+        help="the control API's address (default 127.0.0.1; any other needs a token)",
+    )
+    run.add_argument(
+        "--control-token", help="the token every request must give (default: generated)"
+    )
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -123,6 +158,11 @@ def _run(args: argparse.Namespace) -> int:
         print(line, flush=True)
     for warning in warnings_for(endpoints):  # issue 10 item 7
         print(warning, file=sys.stderr, flush=True)
+    try:
+        control = _start_control(args, plant, runner)
+    except BaseException:
+        plant.close()
+        raise
     print(
         f"running {plant.title} at {'max speed' if speed is None else f'x{speed:g}'}",
         flush=True,
@@ -133,6 +173,8 @@ def _run(args: argparse.Namespace) -> int:
     next_status = [clock.now]
 
     def tick(now: int) -> None:
+        if control is not None:
+            control.observer.sample(now)
         if end is not None and now >= end:
             runner.stop()
         if live_view is not None:
@@ -151,9 +193,33 @@ def _run(args: argparse.Namespace) -> int:
         else:
             runner.run_forever(tick, tick_us=_tick(speed))
     finally:
+        if control is not None:
+            control.close()
         plant.close()
     print(f"stopped at t = {clock.now / S:.3f} s", flush=True)
     return 0
+
+
+def _start_control(args: argparse.Namespace, plant: Plant, runner: Runner) -> Launched | None:
+    """The control API (docs/control.md), unless --no-control; prints its lines."""
+    if args.no_control:
+        return None
+    from fieldtwin.control.launch import launch
+    from fieldtwin.runtime.events import EventBus
+
+    launched = launch(
+        plant,
+        runner,
+        EventBus(),
+        host=args.control_host,
+        port=args.control_port,
+        token=args.control_token,
+    )
+    for line in launched.lines:
+        print(line, flush=True)
+    for warning in launched.warnings:
+        print(warning, file=sys.stderr, flush=True)
+    return launched
 
 
 def _tick(speed: float | None) -> int:
@@ -164,6 +230,8 @@ def _console(args: argparse.Namespace) -> int:
     from fieldtwin.console import Console, run_script
     from fieldtwin.plant import FROM_PLANT, load_plant
 
+    if args.attach is not None:
+        return _attached(args)
     speed = FROM_PLANT if args.speed is SUPPRESS_SPEED else args.speed
     plant = load_plant(args.plant, speed=speed)
     console = Console(plant)
@@ -183,6 +251,33 @@ def _console(args: argparse.Namespace) -> int:
     from fieldtwin.terminal import interactive
 
     return interactive(console, plant)
+
+
+def _attached(args: argparse.Namespace) -> int:
+    """``console --attach URL``: the same commands, run on a running plant."""
+    from fieldtwin.control.attach import interactive, run_remote
+    from fieldtwin.control.client import Client
+
+    if args.plant is not None:
+        print(
+            "fieldtwin: console --attach takes no plant file (the running plant is used)",
+            file=sys.stderr,
+        )
+        return 2
+    with Client(args.attach, token=args.token) as client:
+        if args.commands:
+            return run_remote(client, args.commands, sys.stdout, sys.stderr, "-c")
+        if args.script and args.script != "-":
+            try:
+                lines = Path(args.script).read_text("utf-8").splitlines()
+            except OSError as exc:
+                print(f"fieldtwin: {args.script}: {exc.strerror}", file=sys.stderr)
+                return 2
+            return run_remote(client, lines, sys.stdout, sys.stderr, args.script)
+        if args.script == "-" or not sys.stdin.isatty():
+            return run_remote(client, sys.stdin, sys.stdout, sys.stderr, "<stdin>")
+        client.plant()  # unreachable: a clear error, status 2
+        return interactive(client)
 
 
 if __name__ == "__main__":
