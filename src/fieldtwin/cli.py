@@ -104,8 +104,9 @@ def _control_options(run: argparse.ArgumentParser) -> None:
     run.add_argument("--no-control", action="store_true", help="no control API")
     run.add_argument(
         "--control-host",
-        default="127.0.0.1",
-        help="the control API's address (default 127.0.0.1; any other needs a token)",
+        default=None,
+        help="the control API's address (default 127.0.0.1 without a token; when given,"
+        " every request needs the token)",
     )
     run.add_argument(
         "--control-token", help="the token every request must give (default: generated)"

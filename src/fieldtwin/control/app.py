@@ -10,12 +10,13 @@ mistake the plant names, 404 for an unknown device, input, fault or exchange,
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any, TypeVar
 
 from fastapi import FastAPI, Query, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
+from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from fieldtwin import __version__
 from fieldtwin.control.guards import BodyLimit, TokenGate
@@ -41,25 +42,44 @@ T = TypeVar("T")
 CLOCK_WAIT_S = 3600.0  # a step or a run-until may take as long as it runs at the speed
 
 
+_TYPE_TAGS = {"bool", "int", "float", "str", "list", "dict", "none"}
+
+
+def _field(loc: Sequence[object]) -> str:
+    """``body.speed`` from pydantic's loc (a union's member tags left out)."""
+    parts = [
+        str(part)
+        for part in loc
+        if isinstance(part, int)
+        or (str(part).isidentifier() and str(part) not in _TYPE_TAGS)
+    ]
+    return ".".join(parts) or "body"
+
+
 def _validation(request: Request, exc: Exception) -> JSONResponse:
     assert isinstance(exc, RequestValidationError)
-    problems = [
-        {
-            "field": ".".join(str(part) for part in error.get("loc", ())),
-            "problem": str(error.get("msg", "")),
-        }
-        for error in exc.errors()
-    ][:20]
-    first = problems[0] if problems else {"field": "body", "problem": "invalid"}
+    problems: dict[str, list[str]] = {}
+    for error in exc.errors()[:20]:
+        problems.setdefault(_field(error.get("loc", ())), []).append(str(error.get("msg", "")))
+    field, texts = next(iter(problems.items()), ("body", ["invalid"]))
+    allowed = " or ".join(dict.fromkeys(texts))
     return JSONResponse(
         status_code=422,
         content={
-            "error": f"{first['field']}: {first['problem']}",
-            "field": first["field"],
-            "allowed": first["problem"],
-            "problems": problems,
+            "error": f"{field}: {allowed}",
+            "field": field,
+            "allowed": allowed,
+            "problems": [{"field": f, "problem": " or ".join(t)} for f, t in problems.items()],
         },
     )
+
+
+def _http_error(request: Request, exc: Exception) -> JSONResponse:
+    assert isinstance(exc, StarletteHTTPException)
+    body = {"error": str(exc.detail)}
+    if "body" in str(exc.detail):
+        body["field"] = "body"
+    return JSONResponse(status_code=exc.status_code, content=body, headers=exc.headers)
 
 
 def _plant_error(request: Request, exc: Exception) -> JSONResponse:
@@ -84,6 +104,7 @@ def create_app(control: Control, sim: Sim, *, token: str | None = None) -> Any:
         " power, the clock, the console and the event stream (docs/control.md).",
     )
     app.add_exception_handler(RequestValidationError, _validation)
+    app.add_exception_handler(StarletteHTTPException, _http_error)
     app.add_exception_handler(ConfigError, _plant_error)
     app.add_exception_handler(InboxFull, _busy)
     app.add_exception_handler(InboxClosed, _busy)

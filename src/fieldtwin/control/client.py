@@ -223,8 +223,9 @@ class Client:
         queue: int | None = None,
         timeout_s: float | None = None,
     ) -> Iterator[dict[str, Any]]:
-        """The event stream (a WebSocket); ends after ``timeout_s`` without an event."""
-        from websockets.exceptions import ConnectionClosed
+        """The event stream (a WebSocket, subscribed before this returns); the iterator
+        ends after ``timeout_s`` without an event, or when the plant closes it."""
+        from websockets.exceptions import ConnectionClosed, InvalidHandshake
         from websockets.sync.client import connect
 
         query: dict[str, str] = {}
@@ -241,13 +242,21 @@ class Client:
         url = f"{scheme}://{parts.netloc}{parts.path}/events"
         if query:
             url += "?" + urlencode(query)
-        with connect(url, open_timeout=10) as socket:
-            while True:
-                try:
-                    message = socket.recv(timeout=timeout_s)
-                except (TimeoutError, ConnectionClosed):
-                    return
-                yield json.loads(message)
+        try:
+            opened = connect(url, open_timeout=10)
+        except (InvalidHandshake, OSError, TimeoutError) as exc:
+            raise ControlError(0, f"{self.url}: the event stream refused ({exc})") from None
+
+        def stream() -> Iterator[dict[str, Any]]:
+            with opened as socket:
+                while True:
+                    try:
+                        message = socket.recv(timeout=timeout_s)
+                    except (TimeoutError, ConnectionClosed):
+                        return
+                    yield json.loads(message)
+
+        return stream()
 
 
 __all__ = ["Client", "ConsoleResult", "ControlError"]

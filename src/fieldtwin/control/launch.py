@@ -7,10 +7,10 @@ from dataclasses import dataclass, field
 from fieldtwin.control.observer import Observer
 from fieldtwin.control.resources import Control
 from fieldtwin.control.server import (
+    DEFAULT_HOST,
     DEFAULT_PORT,
     ControlServer,
     bind_control,
-    is_loopback,
     new_token,
 )
 from fieldtwin.plant import Plant
@@ -46,16 +46,18 @@ def launch(
     runner: Runner,
     bus: EventBus,
     *,
-    host: str,
+    host: str | None,
     port: int | None,
     token: str | None,
 ) -> Launched:
     """Start the API on ``host``:``port`` (None: the default port, or any free one if busy).
 
-    Off loopback a token is required: ``token``, or a new one (printed).
+    ``host`` None is 127.0.0.1 without a token; a host given (or a token given)
+    requires a token on every request: ``token``, or a new one (printed).
     """
-    if not is_loopback(host) and token is None:
+    if host is not None and token is None:
         token = new_token()
+    host = host or DEFAULT_HOST
     sock = bind_control(host, DEFAULT_PORT if port is None else port, fallback=port is None)
     inbox = Inbox()
     control = Control(plant, runner, bus)
@@ -77,13 +79,19 @@ def launch(
         launched.warnings.append(
             f"warning: control port {DEFAULT_PORT} is in use; the control API listens on {url}"
         )
-    why = reachability(host)
-    if why is not None:
-        launched.warnings.append(
-            f"warning: control API {url} is reachable from other machines ({why});"
-            " every request needs the control token"
-        )
+    launched.warnings.extend(exposure_warnings(host, url))
     return launched
 
 
-__all__ = ["Launched", "launch"]
+def exposure_warnings(host: str, url: str) -> list[str]:
+    """The warning naming the control listener when other machines can reach it."""
+    why = reachability(host)
+    if why is None:
+        return []
+    return [
+        f"warning: control API {url} is reachable from other machines ({why});"
+        " every request needs the control token"
+    ]
+
+
+__all__ = ["Launched", "exposure_warnings", "launch"]

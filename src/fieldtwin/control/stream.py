@@ -79,7 +79,8 @@ def add_stream(app: FastAPI, control: Control, sim: Sim) -> None:
             await websocket.close(code=1008, reason=f"queue: allowed 1..{DEFAULT_QUEUE}")
             return
         try:
-            devices = await sim.call(lambda: addresses(_split(params.get("device"))))
+            wanted = _split(params.get("device"))
+            devices = await sim.call(lambda: addresses(wanted)) if wanted else None
         except ConfigError as exc:
             await websocket.close(code=1008, reason=str(exc)[:120])
             return
