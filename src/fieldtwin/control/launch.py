@@ -13,6 +13,7 @@ from fieldtwin.control.server import (
     bind_control,
     new_token,
 )
+from fieldtwin.errors import ConfigError
 from fieldtwin.plant import Plant
 from fieldtwin.runtime.events import EventBus
 from fieldtwin.runtime.exposure import reachability
@@ -57,6 +58,8 @@ def launch(
     """
     if host is not None and token is None:
         token = new_token()
+    if token is not None and not token.strip():
+        raise ConfigError("--control-token: an empty token is not allowed")
     host = host or DEFAULT_HOST
     sock = bind_control(host, DEFAULT_PORT if port is None else port, fallback=port is None)
     inbox = Inbox()
