@@ -30,6 +30,7 @@ class Observer:
         self._objects: dict[tuple[str, str], int] = {}
         self._leds: dict[tuple[str, str], str] = {}
         self._watching = False  # a first look after a subscriber came publishes nothing
+        self._names: dict[int, list[str]] = {}  # id(device) -> its object names, looked up once
 
     def sample(self, now: int) -> None:
         if not self.bus.active:
@@ -52,8 +53,11 @@ class Observer:
 
     def _look_objects(self, device: Device, address: str, now: int, first: bool) -> None:
         objects = device.objects()
-        for entry in objects.names()[:MAX_OBJECTS]:
-            name = entry.split()[0]  # a TES lists "H'003' name"
+        names = self._names.get(id(device))
+        if names is None:  # a TES lists "H'003' name": the address is enough
+            names = [entry.split()[0] for entry in objects.names()[:MAX_OBJECTS]]
+            self._names[id(device)] = names
+        for name in names:
             try:
                 value = objects.peek(name)
             except FieldtwinError:

@@ -114,14 +114,15 @@ async def _pump(websocket: WebSocket, sub: Subscription, wakeup: _Wakeup) -> Non
                 if reader.result().get("type") == "websocket.disconnect":
                     break
                 reader = asyncio.ensure_future(websocket.receive())  # what it says is ignored
-            if sub.dropped != dropped:
-                await websocket.send_json({"kind": "dropped", "count": sub.dropped - dropped})
-                dropped = sub.dropped
-            while batch := sub.take(BATCH):
+            while True:
+                if sub.dropped != dropped:
+                    lost, dropped = sub.dropped - dropped, sub.dropped
+                    await websocket.send_json({"kind": "dropped", "count": lost})
+                batch = sub.take(BATCH)
+                if not batch or reader.done():
+                    break
                 for event in batch:
                     await websocket.send_json(event.as_dict())
-                if reader.done():
-                    break
     finally:
         reader.cancel()
 
