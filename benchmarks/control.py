@@ -57,8 +57,9 @@ def stream_rate(seconds: float) -> tuple[float, int, int]:
     runner = Runner(plant.clock, None)
     bus = EventBus()
     inbox = Inbox()
-    server = ControlServer(Control(plant, runner, bus), inbox, bind_control("127.0.0.1", 0,
-                                                                            fallback=False), None)
+    server = ControlServer(
+        Control(plant, runner, bus), inbox, bind_control("127.0.0.1", 0, fallback=False), None
+    )
     url = server.start()
     from fieldtwin.client import Client
 

@@ -159,15 +159,15 @@ def _run(args: argparse.Namespace) -> int:
         print(line, flush=True)
     for warning in warnings_for(endpoints):  # issue 10 item 7
         print(warning, file=sys.stderr, flush=True)
-    try:
-        control = _start_control(args, plant, runner)
-    except BaseException:
-        plant.close()
-        raise
     print(
         f"running {plant.title} at {'max speed' if speed is None else f'x{speed:g}'}",
         flush=True,
     )
+    try:  # after the `running` line: its lines come once the API is up
+        control = _start_control(args, plant, runner)
+    except BaseException:
+        plant.close()
+        raise
     signal.signal(signal.SIGTERM, lambda *_: runner.stop())
     live = sys.stdout.isatty() and not args.no_live
     end = None if args.duration is None else clock.now + round(args.duration * S)

@@ -5,9 +5,9 @@ from __future__ import annotations
 import contextlib
 import queue
 import re
-import threading
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -49,8 +49,17 @@ def _read(stream: IO[str], lines: queue.Queue[str]) -> None:
 @contextmanager
 def fieldtwin_run(plant: Path, *extra: str) -> Iterator[Running]:
     proc = subprocess.Popen(
-        [sys.executable, "-m", "fieldtwin", "run", str(plant), "--no-live",
-         "--control-port", "0", *extra],
+        [
+            sys.executable,
+            "-m",
+            "fieldtwin",
+            "run",
+            str(plant),
+            "--no-live",
+            "--control-port",
+            "0",
+            *extra,
+        ],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -62,7 +71,7 @@ def fieldtwin_run(plant: Path, *extra: str) -> Iterator[Running]:
         deadline = time.monotonic() + START_S
         lines: queue.Queue[str] = queue.Queue()
         threading.Thread(target=_read, args=(proc.stdout, lines), daemon=True).start()
-        while not running.lines or not running.lines[-1].startswith("running "):
+        while not running.lines or not running.lines[-1].startswith("attach: "):
             assert time.monotonic() < deadline, f"no start within {START_S} s: {running.lines}"
             assert proc.poll() is None, f"fieldtwin run ended: {running.lines}"
             with contextlib.suppress(queue.Empty):

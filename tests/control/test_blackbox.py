@@ -155,11 +155,29 @@ def test_malformed_requests_get_4xx_and_the_plant_keeps_serving_modbus(
         ("PUT", "/devices/tes1/inputs/99", {"json": {"value": True}}, 404, None),
         ("PUT", "/devices/5/faults/smoke", {"json": {}}, 404, None),
         ("PUT", "/devices/tes1/inputs/3", {"json": {"value": "maybe"}}, 400, None),
-        ("PUT", "/devices/tes2/inputs/a0", {"json": {"signal": {"kind": "csv", "file": "/etc/passwd"}}}, 400, None),
+        (
+            "PUT",
+            "/devices/tes2/inputs/a0",
+            {"json": {"signal": {"kind": "csv", "file": "/etc/passwd"}}},
+            400,
+            None,
+        ),
         ("POST", "/clock/step", {"json": {"ms": -5}}, 422, "body.ms"),
         ("PUT", "/clock/speed", {"json": {"speed": "warp"}}, 422, "body.speed"),
-        ("POST", "/exchanges", {"content": b'{"m": 1379, "c": ', "headers": {"content-type": "application/json"}}, 422, None),
-        ("POST", "/console", {"content": b"\xff\xfe not json", "headers": {"content-type": "application/json"}}, 400, "body"),
+        (
+            "POST",
+            "/exchanges",
+            {"content": b'{"m": 1379, "c": ', "headers": {"content-type": "application/json"}},
+            422,
+            None,
+        ),
+        (
+            "POST",
+            "/console",
+            {"content": b"\xff\xfe not json", "headers": {"content-type": "application/json"}},
+            400,
+            "body",
+        ),
         ("GET", "/exchanges/abc", {}, 422, "path.ident"),
     ]
     for method, path, kwargs, status, field in cases:

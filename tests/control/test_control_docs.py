@@ -65,8 +65,11 @@ def run_line(line: str, url: str, background: list[subprocess.Popen[str]]) -> No
         words = shlex.split(command.rstrip("&").replace("$URL", url))
         background.append(
             subprocess.Popen(
-                [sys.executable, *words[1:]], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                text=True, cwd=ROOT,
+                [sys.executable, *words[1:]],
+                stdout=subprocess.PIPE,
+                stderr=subprocess.PIPE,
+                text=True,
+                cwd=ROOT,
             )
         )
         import time
@@ -76,8 +79,12 @@ def run_line(line: str, url: str, background: list[subprocess.Popen[str]]) -> No
     if command.startswith("fieldtwin "):
         words = shlex.split(command)
         done = subprocess.run(
-            [sys.executable, "-m", "fieldtwin", *words[1:]], capture_output=True, text=True,
-            timeout=STEP_S, cwd=ROOT, check=False,
+            [sys.executable, "-m", "fieldtwin", *words[1:]],
+            capture_output=True,
+            text=True,
+            timeout=STEP_S,
+            cwd=ROOT,
+            check=False,
         )
         assert done.returncode == 0, (line, done.stderr)
         assert done.stdout.strip(), line
@@ -86,7 +93,11 @@ def run_line(line: str, url: str, background: list[subprocess.Popen[str]]) -> No
     expected = int(comment) if comment.strip().isdigit() else None
     full = "curl -w '\\n%{http_code}' " + command[len("curl ") :]
     done = subprocess.run(
-        ["bash", "-c", full], capture_output=True, text=True, timeout=STEP_S, env=env,
+        ["bash", "-c", full],
+        capture_output=True,
+        text=True,
+        timeout=STEP_S,
+        env=env,
         check=False,
     )
     assert done.returncode == 0, (line, done.stderr)

@@ -50,8 +50,7 @@ def _field(loc: Sequence[object]) -> str:
     parts = [
         str(part)
         for part in loc
-        if isinstance(part, int)
-        or (str(part).isidentifier() and str(part) not in _TYPE_TAGS)
+        if isinstance(part, int) or (str(part).isidentifier() and str(part) not in _TYPE_TAGS)
     ]
     return ".".join(parts) or "body"
 

@@ -73,9 +73,7 @@ class Client:
 
     def request(self, method: str, path: str, body: object = None, **kw: Any) -> Any:
         try:
-            reply = self._http.request(
-                method, path, json=body if body is not None else None, **kw
-            )
+            reply = self._http.request(method, path, json=body if body is not None else None, **kw)
         except httpx.HTTPError as exc:
             raise ControlError(0, f"{self.url}: cannot reach the control API ({exc})") from None
         try:

@@ -95,11 +95,12 @@ class TokenGate:
     def _given(self, scope: Scope) -> str | None:
         for key, value in scope.get("headers", []):
             if key == b"authorization":
-                text = value.decode("latin-1")
+                text = bytes(value).decode("latin-1")
                 if text.lower().startswith("bearer "):
                     return text[7:].strip()
-        query = parse_qs(scope.get("query_string", b"").decode("latin-1"))
-        return query.get("token", [None])[0]
+        raw: bytes = scope.get("query_string", b"")
+        tokens = parse_qs(raw.decode("latin-1")).get("token", [])
+        return tokens[0] if tokens else None
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if self.token is None or scope["type"] not in ("http", "websocket"):

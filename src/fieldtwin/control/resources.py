@@ -167,9 +167,7 @@ class Control:
             for f in self.device(ident).faults().values()
         ]
 
-    def set_fault(
-        self, ident: str, name: str, active: bool, params: Mapping[str, float]
-    ) -> Json:
+    def set_fault(self, ident: str, name: str, active: bool, params: Mapping[str, float]) -> Json:
         device = self.device(ident)
         try:
             fault = device.fault(name)

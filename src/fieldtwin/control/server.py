@@ -85,9 +85,7 @@ class ControlServer:
             app, log_level="warning", lifespan="off", access_log=False, ws_max_size=65536
         )
         self._server = uvicorn.Server(config)
-        self._thread = threading.Thread(
-            target=self._serve, name="fieldtwin-control", daemon=True
-        )
+        self._thread = threading.Thread(target=self._serve, name="fieldtwin-control", daemon=True)
 
     @property
     def url(self) -> str:

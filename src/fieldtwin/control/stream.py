@@ -65,7 +65,9 @@ def add_stream(app: FastAPI, control: Control, sim: Sim) -> None:
             elif ident in known or ident == "clock":
                 out.append(ident)
             else:
-                raise ConfigError(f"device={ident!r}: no such device (allowed: {', '.join(devices)})")
+                raise ConfigError(
+                    f"device={ident!r}: no such device (allowed: {', '.join(devices)})"
+                )
         return out
 
     @app.websocket("/events")

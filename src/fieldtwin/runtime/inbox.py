@@ -11,6 +11,7 @@ is skipped.  The inbox is bounded (``max_pending``): past it, ``submit`` raises
 
 from __future__ import annotations
 
+import contextlib
 import os
 import select
 import threading
@@ -68,10 +69,8 @@ class Inbox:
             if len(self._queue) >= self.max_pending:
                 raise InboxFull(f"{self.max_pending} commands already wait for the simulation")
             self._queue.append(_Command(run, future))
-        try:
+        with contextlib.suppress(BlockingIOError):  # full of wakeups already: it will look
             os.write(self._write_fd, b"\0")
-        except BlockingIOError:
-            pass  # the pipe is full of wakeups already: the runner will look
         return future
 
     def __len__(self) -> int:

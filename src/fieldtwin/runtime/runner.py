@@ -308,9 +308,7 @@ class Runner:
 
     def _holding(self) -> bool:
         """Paused, with an inbox to resume from, outside a step and a command's own run."""
-        return (
-            self._paused and self._inbox is not None and not self._stepping and self._depth == 1
-        )
+        return self._paused and self._inbox is not None and not self._stepping and self._depth == 1
 
     def _hold(self) -> None:
         """Paused: no simulated time, no transport read; wait for a command (bounded)."""
