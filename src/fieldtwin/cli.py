@@ -19,6 +19,7 @@ if TYPE_CHECKING:
 
     from fieldtwin.control.launch import Launched
     from fieldtwin.plant import Plant
+    from fieldtwin.runtime.events import EventBus
     from fieldtwin.runtime.runner import Runner
 
 SUPPRESS_SPEED: object = object()  # --speed not given: the plant's [run] speed decides
@@ -140,6 +141,7 @@ def _run(args: argparse.Namespace) -> int:
     from fieldtwin.live import plain_status, render
     from fieldtwin.plant import build_plant, plant_speed, read_plant
     from fieldtwin.runtime.binder import bind
+    from fieldtwin.runtime.events import EventBus
     from fieldtwin.runtime.exposure import warnings_for
     from fieldtwin.runtime.runner import Runner
 
@@ -164,7 +166,8 @@ def _run(args: argparse.Namespace) -> int:
         flush=True,
     )
     try:  # after the `running` line: its lines come once the API is up
-        control = _start_control(args, plant, runner)
+        # one bus for every window onto the plant (control API, traces)
+        control = _start_control(args, plant, runner, EventBus())
     except BaseException:
         plant.close()
         raise
@@ -201,17 +204,18 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _start_control(args: argparse.Namespace, plant: Plant, runner: Runner) -> Launched | None:
+def _start_control(
+    args: argparse.Namespace, plant: Plant, runner: Runner, bus: EventBus
+) -> Launched | None:
     """The control API (docs/control.md), unless --no-control; prints its lines."""
     if args.no_control:
         return None
     from fieldtwin.control.launch import launch
-    from fieldtwin.runtime.events import EventBus
 
     launched = launch(
         plant,
         runner,
-        EventBus(),
+        bus,
         host=args.control_host,
         port=args.control_port,
         token=args.control_token,

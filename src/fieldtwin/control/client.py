@@ -18,12 +18,15 @@ import time
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from types import TracebackType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 from urllib.parse import quote, urlencode, urlsplit
 
 import httpx
 
 from fieldtwin.errors import FieldtwinError
+
+if TYPE_CHECKING:
+    from websockets.sync.client import ClientConnection
 
 DEFAULT_TIMEOUT_S = 30.0
 
@@ -47,6 +50,39 @@ class ConsoleResult:
 
 def _name(text: str) -> str:
     return quote(text, safe="")
+
+
+class EventStream:
+    """The events of one subscription, oldest first; ``close()`` (or ``with``) leaves."""
+
+    def __init__(self, socket: ClientConnection, timeout_s: float | None) -> None:
+        self._socket = socket.__enter__()  # websockets wants its connection entered
+        self._timeout_s = timeout_s
+        self._closed = False
+
+    def __iter__(self) -> Iterator[dict[str, Any]]:
+        return self
+
+    def __next__(self) -> dict[str, Any]:
+        from websockets.exceptions import ConnectionClosed
+
+        try:
+            message = self._socket.recv(timeout=self._timeout_s)
+        except (TimeoutError, ConnectionClosed):
+            self.close()
+            raise StopIteration from None
+        return dict(json.loads(message))
+
+    def __enter__(self) -> EventStream:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        if not self._closed:
+            self._closed = True
+            self._socket.__exit__(None, None, None)
 
 
 class Client:
@@ -220,10 +256,10 @@ class Client:
         *,
         queue: int | None = None,
         timeout_s: float | None = None,
-    ) -> Iterator[dict[str, Any]]:
+    ) -> EventStream:
         """The event stream (a WebSocket, subscribed before this returns); the iterator
         ends after ``timeout_s`` without an event, or when the plant closes it."""
-        from websockets.exceptions import ConnectionClosed, InvalidHandshake
+        from websockets.exceptions import InvalidHandshake
         from websockets.sync.client import connect
 
         query: dict[str, str] = {}
@@ -245,16 +281,7 @@ class Client:
         except (InvalidHandshake, OSError, TimeoutError) as exc:
             raise ControlError(0, f"{self.url}: the event stream refused ({exc})") from None
 
-        def stream() -> Iterator[dict[str, Any]]:
-            with opened as socket:
-                while True:
-                    try:
-                        message = socket.recv(timeout=timeout_s)
-                    except (TimeoutError, ConnectionClosed):
-                        return
-                    yield json.loads(message)
-
-        return stream()
+        return EventStream(opened, timeout_s)
 
 
-__all__ = ["Client", "ConsoleResult", "ControlError"]
+__all__ = ["Client", "ConsoleResult", "ControlError", "EventStream"]
