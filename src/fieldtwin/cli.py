@@ -17,8 +17,11 @@ from fieldtwin.errors import FieldtwinError
 if TYPE_CHECKING:
     from rich.live import Live
 
+    from fieldtwin.control.launch import Launched
+    from fieldtwin.plant import Plant
     from fieldtwin.runtime.binder import Binding
     from fieldtwin.runtime.events import EventBus
+    from fieldtwin.runtime.runner import Runner
 
 SUPPRESS_SPEED: object = object()  # --speed not given: the plant's [run] speed decides
 
@@ -72,6 +75,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     run.add_argument("--trace", metavar="FILE", help="write the traffic as JSON lines")
     run.add_argument("--pcap", metavar="FILE", help="write the Modbus TCP traffic as a pcap")
+    _control_options(run)
     con = sub.add_parser("console", help="the programming terminal")
     con.add_argument("plant", nargs="?", help="plant file (TOML); default: the embedded plant")
     con.add_argument("--script", "-f", help="run commands from this file ('-' = stdin)")
@@ -84,11 +88,42 @@ def _parser() -> argparse.ArgumentParser:
         default=SUPPRESS_SPEED,
         help="pacing while real endpoints exist: x1, x10, or max (default: [run] speed, else x1)",
     )
+    con.add_argument(
+        "--attach",
+        metavar="URL",
+        help="run the commands on the plant `fieldtwin run` serves at URL (docs/control.md)",
+    )
+    con.add_argument("--token", help="with --attach: the control token the run printed")
     sub.add_parser("tesis", help="the TES parameter workbench (fieldtwin tesis --help)")
     from fieldtwin.tracecli import add_parser as add_trace_parser
 
     add_trace_parser(sub)
     return parser
+
+
+def _port(text: str) -> int:
+    if not text.isdigit() or not 0 <= int(text) <= 65535:
+        raise argparse.ArgumentTypeError(f"{text!r}: a TCP port 0..65535 (0 = any free port)")
+    return int(text)
+
+
+def _control_options(run: argparse.ArgumentParser) -> None:
+    run.add_argument(
+        "--control-port",
+        type=_port,
+        default=None,
+        help="the control API's port (default 8520, or any free one if busy; 0 = any free)",
+    )
+    run.add_argument("--no-control", action="store_true", help="no control API")
+    run.add_argument(
+        "--control-host",
+        default=None,
+        help="the control API's address (default 127.0.0.1 without a token; when given,"
+        " every request needs the token)",
+    )
+    run.add_argument(
+        "--control-token", help="the token every request must give (default: generated)"
+    )
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -150,12 +185,20 @@ def _run(args: argparse.Namespace) -> int:
         f"running {plant.title} at {'max speed' if speed is None else f'x{speed:g}'}",
         flush=True,
     )
+    try:  # after the `running` line: its lines come once the API is up
+        # one bus for every window onto the plant: the API's stream sees the traffic too
+        control = _start_control(args, plant, runner, plant.events)
+    except BaseException:
+        plant.close()
+        raise
     signal.signal(signal.SIGTERM, lambda *_: runner.stop())
     live = sys.stdout.isatty() and not args.no_live
     end = None if args.duration is None else clock.now + round(args.duration * S)
     next_status = [clock.now]
 
     def tick(now: int) -> None:
+        if control is not None:
+            control.observer.sample(now)
         if end is not None and now >= end:
             runner.stop()
         if live_view is not None:
@@ -175,6 +218,8 @@ def _run(args: argparse.Namespace) -> int:
             runner.run_forever(tick, tick_us=_tick(speed))
     finally:
         final = [] if live else plain_status(plant)  # the plant as it stopped (issue 10 item 21)
+        if control is not None:
+            control.close()
         plant.close()
     if final:
         print("\n".join(final), flush=True)
@@ -203,6 +248,29 @@ def _recorders(args: argparse.Namespace, events: EventBus) -> Binding:
     return recorders
 
 
+def _start_control(
+    args: argparse.Namespace, plant: Plant, runner: Runner, bus: EventBus
+) -> Launched | None:
+    """The control API (docs/control.md), unless --no-control; prints its lines."""
+    if args.no_control:
+        return None
+    from fieldtwin.control.launch import launch
+
+    launched = launch(
+        plant,
+        runner,
+        bus,
+        host=args.control_host,
+        port=args.control_port,
+        token=args.control_token,
+    )
+    for line in launched.lines:
+        print(line, flush=True)
+    for warning in launched.warnings:
+        print(warning, file=sys.stderr, flush=True)
+    return launched
+
+
 def _tick(speed: float | None) -> int:
     return 200_000 if speed is None else max(50_000, round(200_000 * speed))
 
@@ -211,6 +279,8 @@ def _console(args: argparse.Namespace) -> int:
     from fieldtwin.console import Console, run_script
     from fieldtwin.plant import FROM_PLANT, load_plant, plant_speed, read_plant
 
+    if args.attach is not None:
+        return _attached(args)
     speed = FROM_PLANT if args.speed is SUPPRESS_SPEED else args.speed
     plant_speed(read_plant(args.plant))  # an invalid [run] speed is reported even with --speed
     plant = load_plant(args.plant, speed=speed)
@@ -240,6 +310,33 @@ def _console(args: argparse.Namespace) -> int:
     from fieldtwin.terminal import interactive
 
     return interactive(console, plant)
+
+
+def _attached(args: argparse.Namespace) -> int:
+    """``console --attach URL``: the same commands, run on a running plant."""
+    from fieldtwin.control.attach import interactive, run_remote
+    from fieldtwin.control.client import Client
+
+    if args.plant is not None:
+        print(
+            "fieldtwin: console --attach takes no plant file (the running plant is used)",
+            file=sys.stderr,
+        )
+        return 2
+    with Client(args.attach, token=args.token) as client:
+        if args.commands:
+            return run_remote(client, args.commands, sys.stdout, sys.stderr, "-c")
+        if args.script and args.script != "-":
+            try:
+                lines = Path(args.script).read_text("utf-8").splitlines()
+            except OSError as exc:
+                print(f"fieldtwin: {args.script}: {exc.strerror}", file=sys.stderr)
+                return 2
+            return run_remote(client, lines, sys.stdout, sys.stderr, args.script)
+        if args.script == "-" or not sys.stdin.isatty():
+            return run_remote(client, sys.stdin, sys.stdout, sys.stderr, "<stdin>")
+        client.plant()  # unreachable: a clear error, status 2
+        return interactive(client)
 
 
 if __name__ == "__main__":

@@ -62,6 +62,11 @@ class TesRegisters:
 
     def address(self, name: str) -> int:
         token = name.strip()
+        if token[:2].upper() == "H'" or token[:1].isdigit():  # an address: no name search
+            try:
+                return int(token, 0) if token.lower().startswith("0x") else parse_word(token)
+            except ConfigError:
+                pass
         for reg in register_names(self._tes.model).values():
             if reg.name.lower() == token.lower():
                 return reg.address

@@ -22,6 +22,17 @@ Three ways to run, chosen afresh on every cycle (attachments may change):
 With nothing scheduled and no end, the runner waits on the wall (time follows
 at ``speed``, or x1) instead of spinning.  Every single wait is at most
 MAX_WAIT_S, so a ``stop()`` from another thread is seen within that time.
+
+Commands from other threads (the control API) come through an inbox
+(fieldtwin.runtime.inbox) given to ``take_commands``: its wakeup descriptor is
+watched with the transports, and its commands run on this thread between two
+instants (at the start of a cycle), one at a time.  A command may itself run
+the clock (``advance``, a power break, an exchange): such a nested run keeps
+pumping the transports, takes no other command until it ends, and passes a
+``stop()`` on to the run around it.  ``pause``/``resume`` hold simulated time
+(the transports are not read while paused; the inbox still is), ``step`` and
+``run_to`` run it by a given amount while paused or not, ``set_speed`` changes
+the pace without a jump in simulated time.
 """
 
 from __future__ import annotations
@@ -33,6 +44,7 @@ from dataclasses import dataclass
 
 from fieldtwin.clock import SimClock
 from fieldtwin.errors import ConfigError, TransportError
+from fieldtwin.runtime.inbox import Inbox
 from fieldtwin.runtime.wall import SystemWall, WallClock
 from fieldtwin.transports.base import AcceptFailed, FdTransport, Flushable, Listener, Transport
 
@@ -123,6 +135,12 @@ class Runner:
         self._stopping = False
         self._tick: tuple[CloseCallback | None, int] | None = None
         self._next_tick = 0
+        self._inbox: Inbox | None = None
+        self._in_command = False  # a command is running: the inbox waits for it
+        self._paused = False
+        self._stepping = 0  # nested runs of step/run_to: they run while paused
+        self._depth = 0  # nested _run calls (a command that runs the clock)
+        self._paces: list[_Pace] = []  # the pace of every run in progress, outermost first
 
     # ----------------------------------------------------------------- attachments
 
@@ -223,6 +241,83 @@ class Runner:
         """Descriptors the runner is watching (links and listeners)."""
         return len(self._by_fd)
 
+    # ----------------------------------------------------------------- commands, clock
+
+    def take_commands(self, inbox: Inbox | None) -> None:
+        """Run the commands of ``inbox`` between instants (None: take no more)."""
+        if self._inbox is not None:
+            self._wall.forget(self._inbox.fileno())
+        self._inbox = inbox
+        if inbox is not None:
+            self._wall.watch(inbox.fileno())
+
+    def _commands(self) -> None:
+        inbox = self._inbox
+        if inbox is None or self._in_command:
+            return
+        self._in_command = True
+        try:
+            inbox.run_pending()
+        finally:
+            self._in_command = False
+
+    @property
+    def paused(self) -> bool:
+        return self._paused
+
+    def pause(self) -> None:
+        """Hold simulated time (from the simulation's thread: a command)."""
+        self._paused = True
+
+    def resume(self) -> None:
+        """Let simulated time run again, from where it stood (no jump)."""
+        if self._paused:
+            self._paused = False
+            self._repace()
+
+    def set_speed(self, speed: float | None) -> None:
+        """A new speed factor (None: as fast as possible), effective at once, no jump."""
+        if speed is not None and not speed > 0:
+            raise ConfigError(f"runner speed={speed!r}: allowed a factor > 0, or None (fastest)")
+        self.speed = speed
+        self._repace()
+
+    def step(self, duration_us: int) -> None:
+        """Run simulated time by ``duration_us`` at the current speed, paused or not."""
+        if duration_us < 0:
+            raise ConfigError(f"cannot step by a negative time ({duration_us} us)")
+        self._stepping += 1
+        try:
+            self._run(self.clock.now + duration_us, None)
+        finally:
+            self._stepping -= 1
+
+    def run_to(self, t_us: int) -> None:
+        """Run simulated time until ``t_us`` (never back), paused or not."""
+        if t_us < self.clock.now:
+            raise ConfigError(
+                f"cannot run until t = {t_us / 1e6:g} s: simulated time is already"
+                f" {self.clock.now / 1e6:.6f} s and never goes back"
+            )
+        self.step(t_us - self.clock.now)
+
+    def _repace(self) -> None:
+        wall, now = self._wall.monotonic(), self.clock.now
+        for pace in self._paces:
+            pace.wall0, pace.sim0, pace.speed = wall, now, self.speed or 1.0
+
+    def _holding(self) -> bool:
+        """Paused, with an inbox to resume from, outside a step and a command's own run."""
+        return self._paused and self._inbox is not None and not self._stepping and self._depth == 1
+
+    def _hold(self) -> None:
+        """Paused: no simulated time, no transport read; wait for a command (bounded)."""
+        assert self._inbox is not None
+        self._inbox.wait(MAX_WAIT_S)
+        self._commands()
+        if not self._paused:
+            self._repace()
+
     # ----------------------------------------------------------------- public runs
 
     def advance(self, duration_us: int) -> None:
@@ -263,21 +358,32 @@ class Runner:
     # ----------------------------------------------------------------- the loop
 
     def _run(self, end: int | None, predicate: Callable[[], bool] | None) -> None:
+        outer = (self._predicate, self._stopping)
         self._stopping = False
         self._predicate = predicate
         pace = _Pace(self._wall.monotonic(), self.clock.now, self.speed or 1.0)
+        self._paces.append(pace)
+        self._depth += 1
         try:
             while not self._done() and self._cycle(end, pace):
                 pass
         finally:
-            self._predicate = None
-            self._stopping = False
+            self._depth -= 1
+            self._paces.pop()
+            stopped = self._stopping
+            self._predicate = outer[0]
+            # a stop() inside a nested run (a command's advance) ends the outer run too
+            self._stopping = outer[1] or (stopped and self._depth > 0)
 
     def _done(self) -> bool:
         return self._stopping or (self._predicate is not None and self._predicate())
 
     def _cycle(self, end: int | None, pace: _Pace) -> bool:
         """One wait-and-run step; False once the end is reached."""
+        self._commands()
+        if self._holding():
+            self._hold()
+            return True
         self._pump()
         if self._done():
             return False

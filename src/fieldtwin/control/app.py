@@ -1,0 +1,235 @@
+"""The control API's routes (FastAPI): REST/JSON over the Device face (docs/control.md).
+
+Each handler validates its request (the schemas), hands one function to the
+simulation's thread (``Sim.call``) and answers with its result.  Errors are
+JSON: ``{"error": "...", "field": "...", "allowed": "..."}``; 400 for a user's
+mistake the plant names, 404 for an unknown device, input, fault or exchange,
+413 for a body over 64 KiB, 422 for a body that does not fit its schema,
+503 while the simulation cannot take a command, 504 when it did not answer in time.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any, TypeVar
+
+from fastapi import FastAPI, Query, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+from starlette.exceptions import HTTPException as StarletteHTTPException
+
+from fieldtwin import __version__
+from fieldtwin.control.guards import BodyLimit, TokenGate
+from fieldtwin.control.resources import Control, NotFound
+from fieldtwin.control.schemas import (
+    ConsoleBody,
+    ExchangeBody,
+    FaultBody,
+    InputBody,
+    ModuleBody,
+    ObjectBody,
+    PowerBreakBody,
+    RunUntilBody,
+    SpeedBody,
+    StepBody,
+)
+from fieldtwin.control.sim import DEFAULT_WAIT_S, CommandTimeout, Sim
+from fieldtwin.control.stream import add_stream
+from fieldtwin.errors import ConfigError
+from fieldtwin.runtime.inbox import InboxClosed, InboxFull
+
+T = TypeVar("T")
+CLOCK_WAIT_S = 3600.0  # a step or a run-until may take as long as it runs at the speed
+
+
+_TYPE_TAGS = {"bool", "int", "float", "str", "list", "dict", "none"}
+
+
+def _field(loc: Sequence[object]) -> str:
+    """``body.speed`` from pydantic's loc (a union's member tags left out)."""
+    parts = [
+        str(part)
+        for part in loc
+        if isinstance(part, int) or (str(part).isidentifier() and str(part) not in _TYPE_TAGS)
+    ]
+    return ".".join(parts) or "body"
+
+
+def _validation(request: Request, exc: Exception) -> JSONResponse:
+    assert isinstance(exc, RequestValidationError)
+    problems: dict[str, list[str]] = {}
+    for error in exc.errors()[:20]:
+        problems.setdefault(_field(error.get("loc", ())), []).append(str(error.get("msg", "")))
+    field, texts = next(iter(problems.items()), ("body", ["invalid"]))
+    allowed = " or ".join(dict.fromkeys(texts))
+    return JSONResponse(
+        status_code=422,
+        content={
+            "error": f"{field}: {allowed}",
+            "field": field,
+            "allowed": allowed,
+            "problems": [{"field": f, "problem": " or ".join(t)} for f, t in problems.items()],
+        },
+    )
+
+
+def _http_error(request: Request, exc: Exception) -> JSONResponse:
+    assert isinstance(exc, StarletteHTTPException)
+    body = {"error": str(exc.detail)}
+    if "body" in str(exc.detail):
+        body["field"] = "body"
+    return JSONResponse(status_code=exc.status_code, content=body, headers=exc.headers)
+
+
+def _plant_error(request: Request, exc: Exception) -> JSONResponse:
+    status = 404 if isinstance(exc, NotFound) else 400
+    return JSONResponse(status_code=status, content={"error": str(exc)})
+
+
+def _busy(request: Request, exc: Exception) -> JSONResponse:
+    return JSONResponse(status_code=503, content={"error": str(exc)})
+
+
+def _late(request: Request, exc: Exception) -> JSONResponse:
+    return JSONResponse(status_code=504, content={"error": str(exc)})
+
+
+def create_app(control: Control, sim: Sim, *, token: str | None = None) -> Any:
+    """The ASGI application: the routes inside the token gate and the body limit."""
+    app = FastAPI(
+        title="fieldtwin control API",
+        version=__version__,
+        description="A running fieldtwin plant: devices, inputs, faults, objects, Text Blocks,"
+        " power, the clock, the console and the event stream (docs/control.md).",
+    )
+    app.add_exception_handler(RequestValidationError, _validation)
+    app.add_exception_handler(StarletteHTTPException, _http_error)
+    app.add_exception_handler(ConfigError, _plant_error)
+    app.add_exception_handler(InboxFull, _busy)
+    app.add_exception_handler(InboxClosed, _busy)
+    app.add_exception_handler(CommandTimeout, _late)
+
+    async def run(fn: Callable[[], T], wait_s: float = DEFAULT_WAIT_S) -> T:
+        return await sim.call(fn, wait_s)
+
+    _plant_routes(app, control, run)
+    _device_routes(app, control, run)
+    _plc_routes(app, control, run)
+    _clock_routes(app, control, run)
+    add_stream(app, control, sim)
+    return BodyLimit(TokenGate(app, token))
+
+
+Run = Callable[..., Any]
+
+
+def _plant_routes(app: FastAPI, c: Control, run: Run) -> None:
+    @app.get("/plant", summary="the plant, its clock and its devices")
+    async def plant() -> Any:
+        return await run(c.plant_json)
+
+    @app.post("/console", summary="run one console command line on the running plant")
+    async def console(body: ConsoleBody) -> Any:
+        return await run(lambda: c.console_line(body.line), body.wait_s + 1)
+
+
+def _device_routes(app: FastAPI, c: Control, run: Run) -> None:
+    @app.get("/devices/{ident}", summary="a device's status: state, mode, LEDs, ports")
+    async def status(ident: str) -> Any:
+        return await run(lambda: c.status(ident))
+
+    @app.get("/devices/{ident}/leds", summary="a device's front-panel LEDs")
+    async def leds(ident: str) -> Any:
+        return await run(lambda: c.leds(ident))
+
+    @app.get("/devices/{ident}/inputs", summary="a device's inputs")
+    async def inputs(ident: str) -> Any:
+        return await run(lambda: c.inputs(ident))
+
+    @app.put("/devices/{ident}/inputs/{name}", summary="set an input, or drive it by a signal")
+    async def set_input(ident: str, name: str, body: InputBody) -> Any:
+        return await run(lambda: c.set_input(ident, name, body.value, body.signal))
+
+    @app.get("/devices/{ident}/faults", summary="the faults a device can be given")
+    async def faults(ident: str) -> Any:
+        return await run(lambda: c.faults(ident))
+
+    @app.put("/devices/{ident}/faults/{name}", summary="set (or clear) a fault")
+    async def set_fault(ident: str, name: str, body: FaultBody) -> Any:
+        return await run(lambda: c.set_fault(ident, name, body.active, body.params))
+
+    @app.delete("/devices/{ident}/faults/{name}", summary="clear a fault")
+    async def clear_fault(ident: str, name: str) -> Any:
+        return await run(lambda: c.set_fault(ident, name, False, {}))
+
+    @app.get("/devices/{ident}/objects", summary="the objects a master reads and writes")
+    async def objects(ident: str) -> Any:
+        return await run(lambda: c.objects(ident))
+
+    @app.get("/devices/{ident}/objects/{name}", summary="read an object (peek: no side effect)")
+    async def read_object(ident: str, name: str, peek: bool = Query(False)) -> Any:
+        return await run(lambda: c.read_object(ident, name, peek))
+
+    @app.put("/devices/{ident}/objects/{name}", summary="write an object")
+    async def write_object(ident: str, name: str, body: ObjectBody) -> Any:
+        return await run(lambda: c.write_object(ident, name, body.value))
+
+    @app.post("/devices/{ident}/power-cycle", summary="a TES: 24 V off and on again")
+    async def power_cycle(ident: str) -> Any:
+        return await run(lambda: c.power_cycle(ident))
+
+
+def _plc_routes(app: FastAPI, c: Control, run: Run) -> None:
+    @app.post("/exchanges", status_code=202, summary="start a Text Block exchange")
+    async def start(body: ExchangeBody) -> Any:
+        return await run(
+            lambda: c.start_exchange(
+                body.m, body.c, body.send, body.text, body.length, body.recv, body.txt
+            )
+        )
+
+    @app.get("/exchanges/{ident}", summary="an exchange: state, and its result once done")
+    async def poll(ident: int) -> Any:
+        return await run(lambda: c.exchange(ident))
+
+    @app.post("/plc/power-break", summary="cut the PLC supply for some seconds; it returns")
+    async def power_break(body: PowerBreakBody) -> Any:
+        return await run(lambda: c.power_break(body.seconds), CLOCK_WAIT_S)
+
+    @app.post("/plc/remove", summary="pull a module out of its slot under power")
+    async def remove(body: ModuleBody) -> Any:
+        return await run(lambda: c.remove(body.module))
+
+    @app.post("/plc/insert", summary="put a module back (it runs its self-test)")
+    async def insert(body: ModuleBody) -> Any:
+        return await run(lambda: c.insert(body.module))
+
+
+def _clock_routes(app: FastAPI, c: Control, run: Run) -> None:
+    @app.get("/clock", summary="simulated time, paused or not, speed")
+    async def clock() -> Any:
+        return await run(c.clock_json)
+
+    @app.post("/clock/pause", summary="hold simulated time")
+    async def pause() -> Any:
+        return await run(c.pause)
+
+    @app.post("/clock/resume", summary="let simulated time run again")
+    async def resume() -> Any:
+        return await run(c.resume)
+
+    @app.post("/clock/step", summary="run simulated time by ms (paused or not)")
+    async def step(body: StepBody) -> Any:
+        return await run(lambda: c.step(body.ms), CLOCK_WAIT_S)
+
+    @app.post("/clock/run-until", summary="run simulated time until t_s")
+    async def run_until(body: RunUntilBody) -> Any:
+        return await run(lambda: c.run_until(body.t_s), CLOCK_WAIT_S)
+
+    @app.put("/clock/speed", summary="change the speed factor (or max)")
+    async def speed(body: SpeedBody) -> Any:
+        value = None if body.speed == "max" else float(body.speed)
+        return await run(lambda: c.set_speed(value))
+
+
+__all__ = ["create_app"]

@@ -1,0 +1,74 @@
+"""Plant-side events for the event stream: object and LED changes (DESIGN rule 13).
+
+The observer looks, it never touches: on each of the runner's ticks (not a
+clock event, so the simulation's schedule is the same observed or not) and
+only while somebody subscribes, it peeks every device's objects and LEDs
+through the Device face and publishes what changed since the last look:
+``object`` events (``{"object": "IW5,0", "value": 4104, "was": 4096}``) and
+``led`` events (``{"led": "ERR", "state": "on", "was": "off"}``).  Between two
+ticks a value that changes and changes back is not seen: the stream shows the
+plant at the tick's resolution (docs/control.md, "Events").
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from fieldtwin.devices.face import Device
+from fieldtwin.errors import FieldtwinError
+from fieldtwin.runtime.events import EventBus
+
+MAX_OBJECTS = 4096  # objects one device is looked at for (a TES map is far smaller)
+
+
+class Observer:
+    """Publishes object and LED changes of ``devices`` on ``bus``."""
+
+    def __init__(self, devices: Sequence[Device], bus: EventBus) -> None:
+        self.devices = list(devices)
+        self.bus = bus
+        self._objects: dict[tuple[str, str], int] = {}
+        self._leds: dict[tuple[str, str], str] = {}
+        self._watching = False  # a first look after a subscriber came publishes nothing
+        self._names: dict[int, list[str]] = {}  # id(device) -> its object names, looked up once
+
+    def sample(self, now: int) -> None:
+        if not self.bus.active:
+            self._watching = False
+            return
+        first = not self._watching
+        self._watching = True
+        for device in self.devices:
+            address = str(device.address)
+            self._look_leds(device, address, now, first)
+            self._look_objects(device, address, now, first)
+
+    def _look_leds(self, device: Device, address: str, now: int, first: bool) -> None:
+        for name, state in device.status().leds:
+            key = (address, name)
+            was = self._leds.get(key)
+            self._leds[key] = state
+            if not first and was is not None and was != state:
+                self.bus.publish(now, "led", address, {"led": name, "state": state, "was": was})
+
+    def _look_objects(self, device: Device, address: str, now: int, first: bool) -> None:
+        objects = device.objects()
+        names = self._names.get(id(device))
+        if names is None:  # a TES lists "H'003' name": the address is enough
+            names = [entry.split()[0] for entry in objects.names()[:MAX_OBJECTS]]
+            self._names[id(device)] = names
+        for name in names:
+            try:
+                value = objects.peek(name)
+            except FieldtwinError:
+                continue  # a module out of its slot, a word its model lacks
+            key = (address, name)
+            was = self._objects.get(key)
+            self._objects[key] = value
+            if not first and was is not None and was != value:
+                self.bus.publish(
+                    now, "object", address, {"object": name, "value": value, "was": was}
+                )
+
+
+__all__ = ["Observer"]

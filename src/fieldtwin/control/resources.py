@@ -1,0 +1,336 @@
+"""What the control API does to the plant, through the Device face only.
+
+Every public method here runs on the simulation's thread (the web handlers hand
+them to the runner through ``Sim.call``) and returns plain JSON values.  A
+user's mistake raises ConfigError (answered 400, or 404 for an unknown device
+or Text Block exchange) and changes nothing.
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+from fieldtwin.clock import MS, S
+from fieldtwin.console import Console
+from fieldtwin.console_syntax import module_address
+from fieldtwin.devices.face import Device, DeviceStatus, Family, Input, TesAddress
+from fieldtwin.errors import ConfigError, FieldtwinError
+from fieldtwin.plant import Plant
+from fieldtwin.runtime.events import EventBus
+from fieldtwin.runtime.runner import Runner
+from fieldtwin.tsx.plc import Plc
+from fieldtwin.tsx.txt import TextBlock
+from fieldtwin.words import format_hex
+
+Json = dict[str, object]
+MAX_EXCHANGES = 256  # Text Block exchanges remembered for polling (oldest forgotten first)
+
+
+class NotFound(ConfigError):
+    """An unknown device, input, fault or exchange: answered 404."""
+
+
+@dataclass(frozen=True, slots=True)
+class _Started:
+    id: int
+    block: TextBlock
+    m: int
+    c: int
+
+
+def device_id(device: Device, devices: list[Device]) -> str:
+    """``5`` / ``23`` for a module; ``tes1`` for a TES (``tes1@2`` when slave 1 answers
+    on several endpoints: the second endpoint in file order)."""
+    address = device.address
+    if not isinstance(address, TesAddress):
+        return str(address)
+    endpoints: list[str] = []
+    for other in devices:
+        a = other.address
+        if isinstance(a, TesAddress) and a.slave == address.slave and a.endpoint not in endpoints:
+            endpoints.append(a.endpoint)
+    index = endpoints.index(address.endpoint)
+    return f"tes{address.slave}" if index == 0 else f"tes{address.slave}@{index + 1}"
+
+
+def status_json(status: DeviceStatus) -> Json:
+    return {
+        "kind": status.kind,
+        "address": status.address,
+        "state": status.state,
+        "mode": status.mode,
+        "leds": dict(status.leds),
+        "ports": [{"name": p.name, "line": p.line} for p in status.ports],
+        "details": dict(status.details),
+    }
+
+
+def refuse_files(spec: object, where: str) -> None:
+    """No request reads a file (docs/control.md, "Security"): a csv signal is refused."""
+    if isinstance(spec, Mapping):
+        if str(spec.get("kind", "")).lower() == "csv":
+            raise ConfigError(
+                f"{where}: kind 'csv' reads a file and is not allowed from the control API"
+                " (put it in the plant file; allowed here: every other kind of docs/signals.md)"
+            )
+        for key, value in spec.items():
+            refuse_files(value, f"{where}.{key}")
+    elif isinstance(spec, list):
+        for index, value in enumerate(spec):
+            refuse_files(value, f"{where}[{index}]")
+
+
+class Control:
+    """The plant as the control API sees it."""
+
+    def __init__(self, plant: Plant, runner: Runner, bus: EventBus) -> None:
+        self.plant = plant
+        self.runner = runner
+        self.bus = bus
+        self.console = Console(plant)
+        self._exchanges: OrderedDict[int, _Started] = OrderedDict()
+        self._next_exchange = 1
+
+    # --- the plant and its devices -----------------------------------------------
+
+    def devices(self) -> dict[str, Device]:
+        devices = self.plant.devices
+        return {device_id(d, devices): d for d in devices}
+
+    def device(self, ident: str) -> Device:
+        found = self.devices()
+        device = found.get(ident)
+        if device is None:
+            raise NotFound(f"no device {ident!r} (allowed: {', '.join(found) or 'none'})")
+        return device
+
+    def plant_json(self) -> Json:
+        return {
+            "title": self.plant.title,
+            "name": self.plant.name,
+            "clock": self.clock_json(),
+            "devices": [
+                {
+                    "id": ident,
+                    "kind": d.kind,
+                    "family": d.family.value,
+                    "address": str(d.address),
+                    "state": d.status().state,
+                }
+                for ident, d in self.devices().items()
+            ],
+        }
+
+    def status(self, ident: str) -> Json:
+        return {"id": ident, **status_json(self.device(ident).status())}
+
+    def leds(self, ident: str) -> dict[str, str]:
+        return dict(self.device(ident).status().leds)
+
+    # --- inputs and faults ---------------------------------------------------------
+
+    def inputs(self, ident: str) -> list[Json]:
+        return [
+            {"name": i.name, "description": i.description, "signal": i.driver is not None}
+            for i in self.device(ident).inputs().values()
+        ]
+
+    def set_input(
+        self, ident: str, name: str, value: bool | float | str | None, signal: object
+    ) -> Json:
+        device = self.device(ident)
+        if (value is None) == (signal is None):
+            raise ConfigError('give either "value" or "signal" (a signal table), not both')
+        point = self._input(device, name)
+        where = f"input {ident} {name}"
+        if signal is not None:
+            refuse_files(signal, f"{where}.signal")
+            assert isinstance(signal, Mapping)
+            point.drive(signal, where=where, base_dir=None)
+            return {"device": ident, "input": point.name, "signal": dict(signal)}
+        assert value is not None
+        point.set(value)
+        return {"device": ident, "input": point.name, "value": value}
+
+    @staticmethod
+    def _input(device: Device, name: str) -> Input:
+        try:
+            return device.input(name)
+        except ConfigError as exc:
+            raise NotFound(str(exc)) from None
+
+    def faults(self, ident: str) -> list[Json]:
+        return [
+            {"name": f.name, "description": f.description, "params": list(f.params)}
+            for f in self.device(ident).faults().values()
+        ]
+
+    def set_fault(self, ident: str, name: str, active: bool, params: Mapping[str, float]) -> Json:
+        device = self.device(ident)
+        try:
+            fault = device.fault(name)
+        except ConfigError as exc:
+            raise NotFound(str(exc)) from None
+        numbers = {k: int(v) if float(v).is_integer() else v for k, v in params.items()}
+        fault.set(active, **numbers)
+        return {"device": ident, "fault": fault.name, "active": active, "params": numbers}
+
+    # --- objects ---------------------------------------------------------------------
+
+    def objects(self, ident: str) -> list[str]:
+        return self.device(ident).objects().names()
+
+    def read_object(self, ident: str, name: str, peek: bool) -> Json:
+        objects = self.device(ident).objects()
+        value = objects.peek(name) if peek else objects.read(name)
+        return {"device": ident, "object": name, "value": value, "hex": format_hex(value)}
+
+    def write_object(self, ident: str, name: str, value: int) -> Json:
+        objects = self.device(ident).objects()
+        objects.write(name, value)
+        now = objects.peek(name)
+        return {"device": ident, "object": name, "value": now, "hex": format_hex(now)}
+
+    def power_cycle(self, ident: str) -> Json:
+        device = self.device(ident)
+        if device.family is not Family.TES:
+            raise ConfigError(
+                f"{device.kind} {device.address}: power-cycle is for a TES;"
+                " a module loses its supply with the PLC's power break"
+            )
+        fault = device.fault("power_off")
+        fault.set(True)
+        fault.clear()
+        return {"device": ident, "power": "cycled"}
+
+    # --- the PLC: Text Blocks, power, slots ---------------------------------------------
+
+    @property
+    def plc(self) -> Plc:
+        if self.plant.plc is None:
+            raise ConfigError("this plant has no PLC (add a [plc] table or [[module]] tables)")
+        return self.plant.plc
+
+    def start_exchange(
+        self,
+        m: int,
+        c: int,
+        send: list[int],
+        text: str | None,
+        length: int | None,
+        recv: int,
+        txt: int,
+    ) -> Json:
+        data = None
+        if text is not None:
+            try:
+                data = text.encode("latin-1")
+            except UnicodeEncodeError:
+                raise ConfigError("text: allowed ISO 8859-1 characters only") from None
+        block = self.plc.start_exchange(
+            m,
+            c,
+            None if data is not None else send,
+            send_bytes=data,
+            length=length,
+            recv_bytes=recv,
+            txt=txt,
+        )
+        ident = self._next_exchange
+        self._next_exchange += 1
+        self._exchanges[ident] = _Started(ident, block, m, c)
+        while len(self._exchanges) > MAX_EXCHANGES:
+            self._exchanges.popitem(last=False)
+        return self.exchange(ident)
+
+    def exchange(self, ident: int) -> Json:
+        started = self._exchanges.get(ident)
+        if started is None:
+            raise NotFound(f"no exchange {ident} (the last {MAX_EXCHANGES} are kept)")
+        block, result = started.block, started.block.result
+        out: Json = {
+            "id": ident,
+            "txt": block.index,
+            "m": format_hex(started.m),
+            "c": format_hex(started.c, 2),
+            "state": block.state.value,
+            "done": block.done,
+            "result": None,
+        }
+        if block.done and result is not None:
+            out["result"] = {
+                result.report_name: result.v,
+                "V": result.v,
+                "S": result.s,
+                "E": int(result.e),
+                "error": result.error_text,
+                "words": result.words,
+                "data": result.data.hex(),
+                "ended_at_s": result.ended_at,
+            }
+        return out
+
+    def power_break(self, seconds: float) -> Json:
+        self.plc.power_break(seconds)
+        return {"power": "back", "t_s": self.plant.clock.now / S}
+
+    def remove(self, module: str) -> Json:
+        rack, slot = module_address(module)
+        self.plc.remove(rack, slot)
+        return {"module": module, "present": False}
+
+    def insert(self, module: str) -> Json:
+        rack, slot = module_address(module)
+        self.plc.reinsert(rack, slot)
+        return {"module": module, "present": True}
+
+    # --- the clock -----------------------------------------------------------------------
+
+    def clock_json(self) -> Json:
+        speed = self.runner.speed
+        return {
+            "t_s": self.plant.clock.now / S,
+            "t_us": self.plant.clock.now,
+            "paused": self.runner.paused,
+            "speed": "max" if speed is None else speed,
+        }
+
+    def _clock_event(self, what: str) -> Json:
+        state = self.clock_json()
+        self.bus.publish(self.plant.clock.now, "clock", "clock", {"what": what, **state})
+        return state
+
+    def pause(self) -> Json:
+        self.runner.pause()
+        return self._clock_event("paused")
+
+    def resume(self) -> Json:
+        self.runner.resume()
+        return self._clock_event("resumed")
+
+    def step(self, ms: float) -> Json:
+        self.runner.step(round(ms * MS))
+        return self._clock_event("stepped")
+
+    def run_until(self, t_s: float) -> Json:
+        self.runner.run_to(round(t_s * S))
+        return self._clock_event("ran")
+
+    def set_speed(self, speed: float | None) -> Json:
+        self.runner.set_speed(speed)
+        self.plant.speed = speed
+        return self._clock_event("speed")
+
+    # --- the console -------------------------------------------------------------------
+
+    def console_line(self, line: str) -> Json:
+        """One console command line on the running plant: its lines, or its error."""
+        try:
+            return {"lines": self.console.execute(line), "error": None}
+        except FieldtwinError as exc:
+            return {"lines": [], "error": str(exc)}
+
+
+__all__ = ["MAX_EXCHANGES", "Control", "NotFound", "device_id", "refuse_files", "status_json"]

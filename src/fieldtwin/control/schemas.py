@@ -1,0 +1,77 @@
+"""The request bodies of the control API: validated, closed (no unknown field), bounded.
+
+Every field states what is allowed; FastAPI answers a body that does not fit
+with a 422 naming the field (fieldtwin.control.errors).
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+Word = Annotated[int, Field(ge=0, le=0xFFFF, description="a 16-bit word, 0..65535")]
+Number = Annotated[float, Field(allow_inf_nan=False)]
+Name = Annotated[str, Field(min_length=1, max_length=64)]
+MAX_SIGNAL_KEYS = 32
+MAX_SEND_WORDS = 128  # a Text Block's send table (the AEM's longest request is far below)
+MAX_TEXT = 1024  # bytes of text a Text Block sends
+MAX_LINE = 4096  # characters of one console line
+
+
+class Closed(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=False)
+
+
+class InputBody(Closed):
+    """Either ``value`` (in the input's unit, as the console takes it) or ``signal``
+    (a signal table exactly as the plant file writes it: ``{"kind": "sine", ...}``)."""
+
+    value: bool | float | Annotated[str, Field(max_length=64)] | None = None
+    signal: (
+        dict[Name, bool | float | Annotated[str, Field(max_length=256)] | list[object]] | None
+    ) = Field(default=None, max_length=MAX_SIGNAL_KEYS)
+
+
+class FaultBody(Closed):
+    active: bool = True
+    params: dict[Name, Number] = Field(default_factory=dict, max_length=8)
+
+
+class ObjectBody(Closed):
+    value: Word
+
+
+class ExchangeBody(Closed):
+    m: Word = Field(description="TXTi,M: H'xyzz' rack x, slot y, channel zz (63: module system)")
+    c: Annotated[int, Field(ge=0, le=0xFF)] = Field(description="TXTi,C: the request code")
+    send: list[Word] = Field(default_factory=list, max_length=MAX_SEND_WORDS)
+    text: Annotated[str, Field(max_length=MAX_TEXT)] | None = None
+    length: Annotated[int, Field(ge=0, le=MAX_TEXT)] | None = None
+    recv: Annotated[int, Field(ge=0, le=2 * MAX_SEND_WORDS)] = 0
+    txt: Annotated[int, Field(ge=0, le=255)] = 0
+
+
+class PowerBreakBody(Closed):
+    seconds: Annotated[float, Field(ge=0, le=3600, allow_inf_nan=False)]
+
+
+class ModuleBody(Closed):
+    module: Annotated[str, Field(pattern=r"^\d{1,2}$", description="5 (rack 0) or 23")]
+
+
+class StepBody(Closed):
+    ms: Annotated[float, Field(gt=0, le=86_400_000, allow_inf_nan=False)]
+
+
+class RunUntilBody(Closed):
+    t_s: Annotated[float, Field(ge=0, le=1e9, allow_inf_nan=False)]
+
+
+class SpeedBody(Closed):
+    speed: Annotated[float, Field(gt=0, le=1e6, allow_inf_nan=False)] | Literal["max"]
+
+
+class ConsoleBody(Closed):
+    line: Annotated[str, Field(max_length=MAX_LINE)]
+    wait_s: Annotated[float, Field(gt=0, le=3600, allow_inf_nan=False)] = 60.0

@@ -1,0 +1,132 @@
+"""The event stream: ``GET /events`` as a WebSocket over the plant's EventBus.
+
+Query: ``kind=modbus,led`` and ``device=5,tes1`` (ids of ``GET /plant``, or
+addresses) filter; ``queue=N`` (1..10000) bounds what may wait unread.  Each
+message is one event as JSON (``{"t_s": ..., "kind": ..., "device": ..., ...}``).
+A subscriber that does not keep up loses its oldest events (the bus's bounded
+queue) and is told so by a ``{"kind": "dropped", "count": N}`` message; it never
+slows the plant and never grows memory beyond its queue (docs/control.md).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import threading
+from typing import TYPE_CHECKING
+
+from fastapi import FastAPI, WebSocket, WebSocketDisconnect
+
+from fieldtwin.errors import ConfigError
+from fieldtwin.runtime.events import DEFAULT_QUEUE, Subscription
+
+if TYPE_CHECKING:
+    from fieldtwin.control.resources import Control
+    from fieldtwin.control.sim import Sim
+
+BATCH = 500  # events taken from the queue per wakeup
+
+
+def _split(text: str | None) -> list[str]:
+    return [part.strip() for part in (text or "").split(",") if part.strip()]
+
+
+class _Wakeup:
+    """Called from the simulation's thread on each event: wakes the sender once."""
+
+    def __init__(self, loop: asyncio.AbstractEventLoop) -> None:
+        self.loop = loop
+        self.event = asyncio.Event()
+        self._pending = False
+        self._lock = threading.Lock()
+
+    def __call__(self) -> None:
+        with self._lock:
+            if self._pending:
+                return
+            self._pending = True
+        self.loop.call_soon_threadsafe(self._set)
+
+    def _set(self) -> None:
+        with self._lock:
+            self._pending = False
+        self.event.set()
+
+
+def add_stream(app: FastAPI, control: Control, sim: Sim) -> None:
+    def addresses(idents: list[str]) -> list[str] | None:
+        if not idents:
+            return None
+        devices = control.devices()
+        known = {str(d.address) for d in devices.values()}
+        out = []
+        for ident in idents:
+            if ident in devices:
+                out.append(str(devices[ident].address))
+            elif ident in known or ident == "clock":
+                out.append(ident)
+            else:
+                raise ConfigError(
+                    f"device={ident!r}: no such device (allowed: {', '.join(devices)})"
+                )
+        return out
+
+    @app.websocket("/events")
+    async def events(websocket: WebSocket) -> None:
+        params = websocket.query_params
+        try:
+            queue = int(params.get("queue", DEFAULT_QUEUE))
+            if not 1 <= queue <= DEFAULT_QUEUE:
+                raise ValueError
+        except ValueError:
+            await websocket.close(code=1008, reason=f"queue: allowed 1..{DEFAULT_QUEUE}")
+            return
+        try:
+            wanted = _split(params.get("device"))
+            devices = await sim.call(lambda: addresses(wanted)) if wanted else None
+        except ConfigError as exc:
+            await websocket.close(code=1008, reason=str(exc)[:120])
+            return
+        wakeup = _Wakeup(asyncio.get_running_loop())
+        try:
+            sub = control.bus.subscribe(
+                _split(params.get("kind")) or None, devices, maxlen=queue, notify=wakeup
+            )
+        except OverflowError as exc:
+            await websocket.close(code=1013, reason=str(exc))
+            return
+        await websocket.accept()
+        try:
+            await _pump(websocket, sub, wakeup)
+        except (WebSocketDisconnect, RuntimeError, OSError):
+            pass
+        finally:
+            sub.close()
+
+
+async def _pump(websocket: WebSocket, sub: Subscription, wakeup: _Wakeup) -> None:
+    reader = asyncio.ensure_future(websocket.receive())  # a close from the peer ends us
+    dropped = 0
+    try:
+        while not reader.done():
+            waiter = asyncio.ensure_future(wakeup.event.wait())
+            await asyncio.wait({waiter, reader}, timeout=1.0, return_when="FIRST_COMPLETED")
+            waiter.cancel()
+            wakeup.event.clear()
+            if reader.done():
+                if reader.result().get("type") == "websocket.disconnect":
+                    break
+                reader = asyncio.ensure_future(websocket.receive())  # what it says is ignored
+            while True:
+                if sub.dropped != dropped:
+                    lost, dropped = sub.dropped - dropped, sub.dropped
+                    await websocket.send_json({"kind": "dropped", "count": lost})
+                batch = sub.take(BATCH)
+                if not batch or reader.done():
+                    break
+                for event in batch:
+                    await websocket.send_json(event.as_dict())
+    finally:
+        reader.cancel()
+
+
+__all__ = ["add_stream"]
