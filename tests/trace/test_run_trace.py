@@ -83,7 +83,16 @@ def traced(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, int, i
     tmp = tmp_path_factory.mktemp("trace")
     plant, trace, pcap = tmp / "plant.toml", tmp / "t.jsonl", tmp / "t.pcap"
     plant.write_text(PLANT)
-    argv = ["run", str(plant), "--no-live", "--trace", str(trace), "--pcap", str(pcap)]
+    argv = [
+        "run",
+        str(plant),
+        "--no-live",
+        "--no-control",
+        "--trace",
+        str(trace),
+        "--pcap",
+        str(pcap),
+    ]
     proc = subprocess.Popen(
         [sys.executable, "-m", "fieldtwin", *argv],
         stdout=subprocess.PIPE,
