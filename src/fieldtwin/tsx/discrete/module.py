@@ -1,0 +1,66 @@
+"""Discrete input and output modules: 16 points seen by the program (Ixy,0..F)."""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+from fieldtwin.clock import MS
+from fieldtwin.errors import ConfigError
+from fieldtwin.tsx.bus import ModuleState
+from fieldtwin.tsx.module import IntelligentModule
+
+POINTS = 16  # object bits 0..F (fieldtwin.tsx.addressing)
+
+
+class DiscreteInputs(IntelligentModule):
+    """An input module: ``set_input(i, level)``; Ixy,i follows it at once."""
+
+    type_name: ClassVar[str] = "TSX DET"
+    self_test_us: ClassVar[int] = 1 * MS
+    has_run_stop: ClassVar[bool] = False
+    points: ClassVar[int] = POINTS
+
+    def __init__(self, *args: object, **kwargs: object) -> None:
+        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+        self.levels = 0
+
+    def set_input(self, point: int, level: bool) -> None:
+        if not 0 <= point < self.points:
+            raise ConfigError(
+                f"{self.type_name} {self.address}: no input {point}"
+                f" (allowed: 0..{self.points - 1})"
+            )
+        mask = 1 << point
+        self.levels = (self.levels | mask) if level else (self.levels & ~mask)
+        if self.state is ModuleState.OPERATIONAL:
+            self.i_bits = self.levels
+
+    def on_self_test_done(self, now: int) -> None:
+        self.i_bits = self.levels
+
+
+class DiscreteOutputs(IntelligentModule):
+    """An output module: Oxy,0..Oxy,F as the PLC wrote them (``o_bits``)."""
+
+    type_name: ClassVar[str] = "TSX DST"
+    self_test_us: ClassVar[int] = 1 * MS
+    has_run_stop: ClassVar[bool] = False
+    discrete_outputs: ClassVar[int] = POINTS
+
+    def output(self, point: int) -> int:
+        return (self.o_bits >> point) & 1
+
+
+INPUT_REFERENCES = {"TSX DET 805": 8, "TSX DET 1605": 16, "TSX DET 3212": 16}
+OUTPUT_REFERENCES = ("TSX DST 1635", "TSX DST 2472")
+
+
+def make_types() -> dict[str, type[IntelligentModule]]:
+    types: dict[str, type[IntelligentModule]] = {}
+    for name, points in INPUT_REFERENCES.items():
+        types[name] = type(
+            name.replace(" ", ""), (DiscreteInputs,), {"type_name": name, "points": points}
+        )
+    for name in OUTPUT_REFERENCES:
+        types[name] = type(name.replace(" ", ""), (DiscreteOutputs,), {"type_name": name})
+    return types
