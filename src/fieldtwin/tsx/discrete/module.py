@@ -7,6 +7,7 @@ from typing import ClassVar
 from fieldtwin.clock import MS
 from fieldtwin.errors import ConfigError
 from fieldtwin.tsx.bus import ModuleState
+from fieldtwin.signals import DiscreteSignal
 from fieldtwin.tsx.module import IntelligentModule
 
 POINTS = 16  # object bits 0..F (fieldtwin.tsx.addressing)
@@ -23,13 +24,36 @@ class DiscreteInputs(IntelligentModule):
     def __init__(self, *args: object, **kwargs: object) -> None:
         super().__init__(*args, **kwargs)  # type: ignore[arg-type]
         self.levels = 0
+        self.signals: dict[int, DiscreteSignal] = {}
 
     def set_input(self, point: int, level: bool) -> None:
+        """A constant level on input ``point`` (a signal there is dropped)."""
+        self._check(point)
+        self.signals.pop(point, None)
+        self._level(point, level)
+
+    def drive(self, point: int, signal: DiscreteSignal) -> None:
+        """Input ``point`` follows ``signal`` (simulated time)."""
+        self._check(point)
+        self.signals[point] = signal
+        self._follow(point, signal, self.clock.now)
+
+    def _follow(self, point: int, signal: DiscreteSignal, now: int) -> None:
+        if self.signals.get(point) is not signal:
+            return
+        self._level(point, signal.value_at(now))
+        after = signal.next_change(now)
+        if after is not None:
+            self.call_at(after, lambda at: self._follow(point, signal, at))
+
+    def _check(self, point: int) -> None:
         if not 0 <= point < self.points:
             raise ConfigError(
                 f"{self.type_name} {self.address}: no input {point}"
                 f" (allowed: 0..{self.points - 1})"
             )
+
+    def _level(self, point: int, level: bool) -> None:
         mask = 1 << point
         self.levels = (self.levels | mask) if level else (self.levels & ~mask)
         if self.state is ModuleState.OPERATIONAL:
