@@ -31,6 +31,8 @@ from fieldtwin.tsx.plcmemory import (
     SYSTEM_WORDS,
     PlcMemory,
     TxtDeclaration,
+    calendar_words,
+    days_from_civil,
 )
 from fieldtwin.tsx.textblock import ERR_MODULE_FAULT, ERR_POWER_BREAK
 from fieldtwin.tsx.txt import (
@@ -121,6 +123,7 @@ class Plc:
         self.memory = PlcMemory(self)
         self.program: Executor | None = None
         self.program_source = ""
+        self.calendar_epoch_s: int | None = None  # SW51..SW56 at simulated time 0
         self._slots: dict[tuple[int, int], _Slot] = {}
         self._scan: Handle | None = self.clock.call_later(self.scan_us, self._end_of_task)
 
@@ -284,6 +287,9 @@ class Plc:
         self.cycles += 1
         program = self.program
         if program is not None and self.running:  # PRE, CHART, POST on the input image
+            if self.calendar_epoch_s is not None:
+                for word, value in calendar_words(self.calendar_epoch_s + now // S).items():
+                    self.sw[word] = value
             program.run_master_task(now)
         registers = self.cycles % self.model.register_every == 0
         for entry in self._slots.values():
@@ -440,6 +446,17 @@ class Plc:
         executor = Executor.from_source(text, self.memory, source=source or name)
         self.program, self.program_source = executor, text
         return executor
+
+    def set_calendar(
+        self, year: int, month: int, day: int, hour: int = 0, minute: int = 0, second: int = 0
+    ) -> None:
+        """The PLC's date and time now (SW51..SW56 follow simulated time from here)."""
+        if not (1980 <= year <= 2079 and 1 <= month <= 12 and 1 <= day <= 31):
+            raise ConfigError(f"date {year}-{month}-{day} not allowed (1980..2079)")
+        if not (0 <= hour < 24 and 0 <= minute < 60 and 0 <= second < 60):
+            raise ConfigError(f"time {hour}:{minute}:{second} not allowed")
+        epoch = days_from_civil(year, month, day) * 86400 + hour * 3600 + minute * 60 + second
+        self.calendar_epoch_s = epoch - self.clock.now // S
 
     def unload_program(self) -> None:
         self.program = None

@@ -44,6 +44,7 @@ class TxtDeclaration:
     indirect: int | None = None  # Wi: the addressing table Wi..Wi+5
     send: tuple[str, int] | None = None  # ("W" or "CW", address)
     recv: tuple[str, int] | None = None  # ("W", address)
+    send_words: int | None = None  # the declared transmission table length, W200 (4)
 
 
 class PlcMemory:
@@ -210,6 +211,8 @@ class PlcMemory:
         else:
             if declared.send is not None:
                 kind, at = declared.send
+                if length == 0 and declared.send_words is not None:  # the whole table
+                    length = 2 * declared.send_words
                 send = self._table(kind)[at : at + (length + 1) // 2]
             if declared.recv is not None:
                 recv_table = declared.recv[1]
@@ -235,3 +238,36 @@ class PlcMemory:
         plc = self.plc
         plc.bits[:] = [0] * len(plc.bits)
         plc.data[:] = [0] * len(plc.data)
+
+
+# --- the calendar of the system words SW51..SW56 (sans-IO: no datetime) --------------
+
+
+def civil_from_days(days: int) -> tuple[int, int, int]:
+    """Days since 1970-01-01 -> (year, month, day), proleptic Gregorian."""
+    z = days + 719468
+    era = (z if z >= 0 else z - 146096) // 146097
+    doe = z - era * 146097
+    yoe = (doe - doe // 1460 + doe // 36524 - doe // 146096) // 365
+    doy = doe - (365 * yoe + yoe // 4 - yoe // 100)
+    mp = (5 * doy + 2) // 153
+    day = doy - (153 * mp + 2) // 5 + 1
+    month = mp + 3 if mp < 10 else mp - 9
+    return yoe + era * 400 + (month <= 2), month, day
+
+
+def days_from_civil(year: int, month: int, day: int) -> int:
+    y = year - (month <= 2)
+    era = (y if y >= 0 else y - 399) // 400
+    yoe = y - era * 400
+    doy = (153 * (month + (-3 if month > 2 else 9)) + 2) // 5 + day - 1
+    doe = yoe * 365 + yoe // 4 - yoe // 100 + doy
+    return era * 146097 + doe - 719468
+
+
+def calendar_words(epoch_s: int) -> dict[int, int]:
+    """SW51 seconds, SW52 minutes, SW53 hours, SW54 day, SW55 month, SW56 year (the
+    DEM 5.3-4 POST L12 reads them so; docs/manual-notes.md)."""
+    days, rest = divmod(epoch_s, 86400)
+    year, month, day = civil_from_days(days)
+    return {51: rest % 60, 52: rest // 60 % 60, 53: rest // 3600, 54: day, 55: month, 56: year}

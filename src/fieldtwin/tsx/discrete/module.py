@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import ClassVar
 
 from fieldtwin.clock import MS
@@ -71,8 +72,26 @@ class DiscreteOutputs(IntelligentModule):
     has_run_stop: ClassVar[bool] = False
     discrete_outputs: ClassVar[int] = POINTS
 
+    def __init__(self, *args: object, **kwargs: object) -> None:
+        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+        self.wires: dict[int, list[Callable[[bool], None]]] = {}
+
     def output(self, point: int) -> int:
         return (self.o_bits >> point) & 1
+
+    def wire(self, point: int, receiver: Callable[[bool], None]) -> None:
+        """Wire output ``point`` to an input elsewhere (the DEM 5.3-4 O3,4 drives the
+        DEM's synchronization input): ``receiver(level)`` on every change."""
+        if not 0 <= point < self.discrete_outputs:
+            raise ConfigError(f"{self.type_name} {self.address}: no output {point:X}")
+        self.wires.setdefault(point, []).append(receiver)
+
+    def on_outputs(self, old_ow: list[int], old_o: int, now: int) -> None:
+        changed = old_o ^ self.o_bits
+        for point, receivers in self.wires.items():
+            if changed >> point & 1:
+                for receiver in receivers:
+                    receiver(bool(self.o_bits >> point & 1))
 
 
 INPUT_REFERENCES = {"TSX DET 805": 8, "TSX DET 1605": 16, "TSX DET 3212": 16}
