@@ -27,6 +27,7 @@ every port.  Errors name the file and the field path: ``plant.toml: module[1].sl
 
 from __future__ import annotations
 
+import datetime
 import re
 import tomllib
 from collections.abc import Mapping
@@ -324,7 +325,7 @@ def _build_plc(
     return plc, outputs, keys
 
 
-PROGRAM_KEYS = ("program", "constants", "text_blocks")
+PROGRAM_KEYS = ("program", "constants", "text_blocks", "date")
 _TABLE_RE = re.compile(r"^(CW|W)(\d{1,4})$", re.IGNORECASE)
 
 
@@ -334,7 +335,7 @@ def _program(plc: Plc, keys: Mapping[str, object], plant_file: PlantFile) -> Non
     where = f"{plant_file.name}: plc"
     constants = keys.get("constants", {})
     if not isinstance(constants, Mapping):
-        raise ConfigError(f'{where}.constants: a table like {{ CW0 = [1, "H\'0802\'"] }}')
+        raise ConfigError(f"{where}.constants: a table like {{ CW0 = [1, \"H'0802'\"] }}")
     for start, values in constants.items():
         at = f"{where}.constants.{start}"
         first = _table_address(start, at, ("CW",))[1]
@@ -348,6 +349,8 @@ def _program(plc: Plc, keys: Mapping[str, object], plant_file: PlantFile) -> Non
         raise ConfigError(f'{where}.text_blocks: a table like {{ TXT0 = {{ indirect = "W20" }} }}')
     for txt, decl in blocks.items():
         plc.declare_text_block(*_declaration(txt, decl, f"{where}.text_blocks.{txt}"))
+    if "date" in keys:
+        plc.set_calendar(*_date(keys["date"], f"{where}.date"))
     program = keys.get("program")
     if program is None:
         return
@@ -370,6 +373,17 @@ def _program(plc: Plc, keys: Mapping[str, object], plant_file: PlantFile) -> Non
         raise ConfigError(f"{where}.program: {exc}") from None
 
 
+def _date(value: object, where: str) -> tuple[int, int, int, int, int, int]:
+    """``date = "1994-07-15T18:05:33"``: the PLC calendar (SW51..SW56) at the start."""
+    try:
+        d = datetime.datetime.fromisoformat(str(value))
+    except ValueError:
+        raise ConfigError(
+            f'{where}: {value!r} is not a date (e.g. "1994-07-15T18:05:33")'
+        ) from None
+    return d.year, d.month, d.day, d.hour, d.minute, d.second
+
+
 def _table_address(text: object, where: str, kinds: tuple[str, ...]) -> tuple[str, int]:
     match = _TABLE_RE.match(text) if isinstance(text, str) else None
     if match is None or match.group(1).upper() not in kinds:
@@ -382,8 +396,8 @@ def _declaration(txt: str, decl: object, where: str) -> tuple[int, TxtDeclaratio
     match = re.match(r"^TXT(\d{1,2})$", txt, re.IGNORECASE)
     if match is None:
         raise ConfigError(f"{where}: {txt!r} is not a Text Block (allowed TXT0..TXT63)")
-    if not isinstance(decl, Mapping) or not set(decl) <= {"indirect", "send", "recv"}:
-        raise ConfigError(f"{where}: a table of indirect = \"Wi\", or send = and recv = \"Wi\"")
+    if not isinstance(decl, Mapping) or not set(decl) <= {"indirect", "send", "recv", "words"}:
+        raise ConfigError(f'{where}: a table of indirect = "Wi", or send = and recv = "Wi"')
     indirect = send = recv = None
     if "indirect" in decl:
         indirect = _table_address(decl["indirect"], f"{where}.indirect", ("W",))[1]
@@ -391,7 +405,14 @@ def _declaration(txt: str, decl: object, where: str) -> tuple[int, TxtDeclaratio
         send = _table_address(decl["send"], f"{where}.send", ("W", "CW"))
     if "recv" in decl:
         recv = _table_address(decl["recv"], f"{where}.recv", ("W",))
-    return int(match.group(1)), TxtDeclaration(indirect, send, recv)
+    words = decl.get("words")
+    if words is not None and (
+        isinstance(words, bool) or not isinstance(words, int) or not 1 <= words <= 127
+    ):
+        raise ConfigError(
+            f"{where}.words: {words!r} not allowed (the table's length, 1..127 words)"
+        )
+    return int(match.group(1)), TxtDeclaration(indirect, send, recv, words)
 
 
 def _initial_outputs(plc: Plc, outputs: object, where: str) -> None:

@@ -7,20 +7,21 @@ discrete signal table.  Output modules have no inputs.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from functools import partial
 from pathlib import Path
 
 from fieldtwin.devices.common import apply_faults, apply_inputs
 from fieldtwin.devices.context import BuildContext
-from fieldtwin.devices.face import Family, Input, InputValue, SignalSpec
+from fieldtwin.devices.face import Family, Input, InputValue, ModuleAddress, SignalSpec
 from fieldtwin.devices.kind import Build, DeviceKind
 from fieldtwin.devices.module import IDENTITY, ModuleDevice, insert_module, own_keys
 from fieldtwin.devices.schema import Key, Schema, Table
 from fieldtwin.errors import ConfigError
 from fieldtwin.signals import discrete_from_spec
 from fieldtwin.tsx.discrete import MODULE_TYPES
-from fieldtwin.tsx.discrete.module import DiscreteInputs
+from fieldtwin.tsx.dem24 import Dem24
+from fieldtwin.tsx.discrete.module import DiscreteInputs, DiscreteOutputs
 from fieldtwin.tsx.module import IntelligentModule
 from fieldtwin.tsx.plc import Plc
 
@@ -64,6 +65,45 @@ class DiscreteDevice(ModuleDevice):
             raise ConfigError(f"{where}.inputs: a table of input = value or signal")
         apply_inputs(self, inputs, f"{where}.inputs", ctx.base_dir)
         apply_faults(self, table.get("faults", []), f"{where}.faults")
+        wires = table.get("wires", {})
+        if not isinstance(wires, Mapping):
+            raise ConfigError(
+                f'{where}.wires: a table like {{ "4" = {{ slot = 4, input = "sync" }} }}'
+            )
+        for point, target in wires.items():
+            at = f"{where}.wires.{point}"
+            ctx.after_build(partial(self._wire, str(point), target, ctx, at))
+
+    def _wire(self, point: str, target: object, ctx: BuildContext, where: str) -> None:
+        """An output wired to an input of another module of the plant (its Device face;
+        ``input = "sync"`` is a DEM's IN-SYN, DEM 5.3-4 O3,4)."""
+        module = self.discrete
+        if not isinstance(module, DiscreteOutputs):
+            raise ConfigError(f"{where}: {module.type_name} has no outputs to wire")
+        try:
+            index = int(point, 16)
+        except ValueError:
+            raise ConfigError(f"{where}: {point!r} is not an output (allowed 0..F)") from None
+        if not isinstance(target, Mapping) or not {"slot", "input"} <= set(target):
+            raise ConfigError(f'{where}: a table {{ rack = 0, slot = 4, input = "sync" }}')
+        rack, slot, name = target.get("rack", 0), target["slot"], str(target["input"])
+        found = [
+            d
+            for d in ctx.devices
+            if isinstance(d, ModuleDevice) and d.address == ModuleAddress(rack, slot)
+        ]
+        if not found:
+            raise ConfigError(f"{where}: no module in rack {rack} slot {slot}")
+        other = found[0]
+        if name == "sync" and isinstance(other.module, Dem24):
+            module.wire(index, other.module.set_sync_input)
+            return
+        entry = other.input(name)
+
+        def receive(level: bool) -> None:
+            entry.set(int(level))
+
+        module.wire(index, receive)
 
 
 def _builder(cls: type[IntelligentModule]) -> Build:
@@ -78,7 +118,12 @@ def _builder(cls: type[IntelligentModule]) -> Build:
 
 
 SCHEMA = Schema(
-    IDENTITY, (Key("inputs", '{ "0" = 1 or a signal, ... "F" }'), Key("faults", "names"))
+    IDENTITY,
+    (
+        Key("inputs", '{ "0" = 1 or a signal, ... "F" }'),
+        Key("faults", "names"),
+        Key("wires", '{ "4" = { rack, slot, input } } an output to another input'),
+    ),
 )
 KINDS = tuple(
     DeviceKind(name, Family.MODULE, SCHEMA, _builder(cls), cls)
