@@ -11,6 +11,8 @@ from collections.abc import Callable, Iterable
 from typing import ClassVar, TextIO
 
 from fieldtwin.clock import MS, S
+from fieldtwin.console_prog import HELP as PROG_HELP
+from fieldtwin.console_prog import is_internal, prog_command
 from fieldtwin.console_syntax import (
     canonical_name,
     integer,
@@ -59,6 +61,7 @@ HELP = {
     "tes": "tes [ENDPOINT] SLAVE read ADDR [N] | peek ADDR [N] | write ADDR VALUE"
     " | input I VALUE | signal I KIND key=value... | fault NAME on|off | faults | status | leds"
     " | power-cycle",
+    "prog": PROG_HELP,
     "help": "help [COMMAND]",
     "quit": "quit",
 }
@@ -101,6 +104,7 @@ class Console:
             "txt": self._txt,
             "tes": self._tes,
             "help": self._help,
+            "prog": prog_command(lambda: self.plc),
         }
 
     @property
@@ -136,7 +140,7 @@ class Console:
 
     def _show(self, name: str) -> str:
         value = self.plc.read(name)
-        if name.upper().startswith("W"):
+        if name.upper().startswith("W") or is_internal(name):
             return str(value)
         ref = parse_object(name)
         return str(value) if ref.is_bit else format_hex(value)

@@ -7,7 +7,7 @@ discrete signal table.  Output modules have no inputs.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from functools import partial
 from pathlib import Path
 
@@ -19,8 +19,8 @@ from fieldtwin.devices.module import IDENTITY, ModuleDevice, insert_module, own_
 from fieldtwin.devices.schema import Key, Schema, Table
 from fieldtwin.errors import ConfigError
 from fieldtwin.signals import discrete_from_spec
-from fieldtwin.tsx.discrete import MODULE_TYPES
 from fieldtwin.tsx.dem24 import Dem24
+from fieldtwin.tsx.discrete import MODULE_TYPES
 from fieldtwin.tsx.discrete.module import DiscreteInputs, DiscreteOutputs
 from fieldtwin.tsx.module import IntelligentModule
 from fieldtwin.tsx.plc import Plc

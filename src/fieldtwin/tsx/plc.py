@@ -18,9 +18,9 @@ from typing import TypeVar
 
 from fieldtwin.clock import MS, Handle, S, SimClock, seconds
 from fieldtwin.errors import ConfigError
-from fieldtwin.tsx import registry
 from fieldtwin.pl7.executor import Executor
 from fieldtwin.pl7.tree import Internal
+from fieldtwin.tsx import registry
 from fieldtwin.tsx.addressing import ObjectKind, ObjectRef, parse_object
 from fieldtwin.tsx.bus import Pacer
 from fieldtwin.tsx.module import BusImage, IntelligentModule, ModuleContext
@@ -123,6 +123,7 @@ class Plc:
         self.memory = PlcMemory(self)
         self.program: Executor | None = None
         self.program_source = ""
+        self.watch = [f"W{i}" for i in range(8)]  # the words the live view shows
         self.calendar_epoch_s: int | None = None  # SW51..SW56 at simulated time 0
         self._slots: dict[tuple[int, int], _Slot] = {}
         self._scan: Handle | None = self.clock.call_later(self.scan_us, self._end_of_task)
@@ -494,9 +495,7 @@ class Plc:
         tables = {"B": self.bits, "CW": self.cw, "SY": self.sy, "SW": self.sw, "W": self.data}
         table = tables[kind]
         if index >= len(table):
-            raise ConfigError(
-                f"{name!r}: out of range (allowed {kind}0..{kind}{len(table) - 1})"
-            )
+            raise ConfigError(f"{name!r}: out of range (allowed {kind}0..{kind}{len(table) - 1})")
         return table
 
     def _write_internal(self, name: str, match: re.Match[str], value: int) -> None:

@@ -7,8 +7,8 @@ from typing import ClassVar
 
 from fieldtwin.clock import MS
 from fieldtwin.errors import ConfigError
-from fieldtwin.tsx.bus import ModuleState
 from fieldtwin.signals import DiscreteSignal
+from fieldtwin.tsx.bus import ModuleState
 from fieldtwin.tsx.module import IntelligentModule
 
 POINTS = 16  # object bits 0..F (fieldtwin.tsx.addressing)
@@ -50,8 +50,7 @@ class DiscreteInputs(IntelligentModule):
     def _check(self, point: int) -> None:
         if not 0 <= point < self.points:
             raise ConfigError(
-                f"{self.type_name} {self.address}: no input {point}"
-                f" (allowed: 0..{self.points - 1})"
+                f"{self.type_name} {self.address}: no input {point} (allowed: 0..{self.points - 1})"
             )
 
     def _level(self, point: int, level: bool) -> None:
