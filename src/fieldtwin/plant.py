@@ -27,7 +27,6 @@ every port.  Errors name the file and the field path: ``plant.toml: module[1].sl
 
 from __future__ import annotations
 
-import datetime
 import re
 import tomllib
 from collections.abc import Mapping
@@ -350,7 +349,11 @@ def _program(plc: Plc, keys: Mapping[str, object], plant_file: PlantFile) -> Non
     for txt, decl in blocks.items():
         plc.declare_text_block(*_declaration(txt, decl, f"{where}.text_blocks.{txt}"))
     if "date" in keys:
-        plc.set_calendar(*_date(keys["date"], f"{where}.date"))
+        date = _date(keys["date"], f"{where}.date")
+        try:
+            plc.set_calendar(*date)
+        except ConfigError as exc:
+            raise ConfigError(f"{where}.date: {exc}") from None
     program = keys.get("program")
     if program is None:
         return
@@ -373,15 +376,16 @@ def _program(plc: Plc, keys: Mapping[str, object], plant_file: PlantFile) -> Non
         raise ConfigError(f"{where}.program: {exc}") from None
 
 
+_DATE_RE = re.compile(r"^(\d{4})-(\d{2})-(\d{2})[T ](\d{2}):(\d{2}):(\d{2})$")
+
+
 def _date(value: object, where: str) -> tuple[int, int, int, int, int, int]:
     """``date = "1994-07-15T18:05:33"``: the PLC calendar (SW51..SW56) at the start."""
-    try:
-        d = datetime.datetime.fromisoformat(str(value))
-    except ValueError:
-        raise ConfigError(
-            f'{where}: {value!r} is not a date (e.g. "1994-07-15T18:05:33")'
-        ) from None
-    return d.year, d.month, d.day, d.hour, d.minute, d.second
+    match = _DATE_RE.match(value) if isinstance(value, str) else None
+    if match is None:
+        raise ConfigError(f'{where}: {value!r} is not a date (e.g. "1994-07-15T18:05:33")')
+    y, mo, d, h, mi, s = (int(g) for g in match.groups())
+    return y, mo, d, h, mi, s
 
 
 def _table_address(text: object, where: str, kinds: tuple[str, ...]) -> tuple[str, int]:
