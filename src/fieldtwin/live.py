@@ -191,10 +191,13 @@ def program_line(plc: Plc) -> str:
     else:
         state = "running"
     steps = ",".join(program.active_steps()) if program.layout is not None else ""
-    words = " ".join(f"{plc.read(w):04X}" for w in plc.watch)
+    if plc.watch == [f"W{i}" for i in range(8)]:
+        words = "W0..7 " + " ".join(f"{plc.read(w):04X}" for w in plc.watch)
+    else:
+        words = " ".join(f"{w}={plc.read(w):04X}" for w in plc.watch)
     head = f"program {state}  task {program.cycles}"
     if program.layout is not None:
         head += f"  steps {steps or '-'}"
     if program.faults:
         head += f"  faults {len(program.faults)}"
-    return f"{head}  {plc.watch[0]}..{plc.watch[-1].removeprefix('W')} {words}" if words else head
+    return f"{head}  {words}" if plc.watch else head

@@ -324,7 +324,7 @@ def _build_plc(
     return plc, outputs, keys
 
 
-PROGRAM_KEYS = ("program", "constants", "text_blocks", "date")
+PROGRAM_KEYS = ("program", "constants", "text_blocks", "date", "watch")
 _TABLE_RE = re.compile(r"^(CW|W)(\d{1,4})$", re.IGNORECASE)
 
 
@@ -354,6 +354,16 @@ def _program(plc: Plc, keys: Mapping[str, object], plant_file: PlantFile) -> Non
             plc.set_calendar(*date)
         except ConfigError as exc:
             raise ConfigError(f"{where}.date: {exc}") from None
+    if "watch" in keys:
+        watch = keys["watch"]
+        if not isinstance(watch, list) or not all(isinstance(w, str) for w in watch):
+            raise ConfigError(f'{where}.watch: a list of objects, e.g. ["W0", "W1210"]')
+        for name in watch:
+            try:
+                plc.read(name)
+            except ConfigError as exc:
+                raise ConfigError(f"{where}.watch: {exc}") from None
+        plc.watch = [str(w).upper() for w in watch]
     program = keys.get("program")
     if program is None:
         return
