@@ -318,7 +318,8 @@ def _build_plc(
     if plc_table:
         raise ConfigError(
             f"{name}: plc: unknown key(s) {', '.join(sorted(plc_table))}"
-            f" (allowed: model, scan_ms, outputs, {', '.join(PROGRAM_KEYS)})"
+            " (allowed: model, scan_ms, outputs)"
+            f" and, for a program, {', '.join(PROGRAM_KEYS)}"
         )
     plc = Plc(model=model, scan_ms=scan_ms, clock=clock, runner=runner, speed=speed)
     return plc, outputs, keys
