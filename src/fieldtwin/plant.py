@@ -330,6 +330,16 @@ _TABLE_RE = re.compile(r"^(CW|W)(\d{1,4})$", re.IGNORECASE)
 
 
 def _program(plc: Plc, keys: Mapping[str, object], plant_file: PlantFile) -> None:
+    try:
+        _program_keys(plc, keys, plant_file)
+    except ConfigError as exc:
+        text, where = str(exc), f"{plant_file.name}: plc"
+        raise ConfigError(
+            text if text.startswith(plant_file.name) else f"{where}: {text}"
+        ) from None
+
+
+def _program_keys(plc: Plc, keys: Mapping[str, object], plant_file: PlantFile) -> None:
     """``constants`` (CW words), ``text_blocks`` (how TXTi's tables are declared), then
     ``program``: the PL7-3 file, relative to the plant file (docs/plant.md)."""
     where = f"{plant_file.name}: plc"
@@ -381,6 +391,8 @@ def _program(plc: Plc, keys: Mapping[str, object], plant_file: PlantFile) -> Non
             text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise ConfigError(f"{where}.program: {path}: cannot read ({exc.strerror})") from None
+    except ValueError:  # a NUL in the name
+        raise ConfigError(f"{where}.program: {program!r} is not a file name") from None
     try:
         plc.load_program(text, source=str(path))
     except ConfigError as exc:

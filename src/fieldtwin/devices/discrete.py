@@ -72,7 +72,14 @@ class DiscreteDevice(ModuleDevice):
             )
         for point, target in wires.items():
             at = f"{where}.wires.{point}"
-            ctx.after_build(partial(self._wire, str(point), target, ctx, at))
+            ctx.after_build(partial(self._wire_at, str(point), target, ctx, at))
+
+    def _wire_at(self, point: str, target: object, ctx: BuildContext, where: str) -> None:
+        try:
+            self._wire(point, target, ctx, where)
+        except ConfigError as exc:
+            text = str(exc)
+            raise ConfigError(text if text.startswith(where) else f"{where}: {text}") from None
 
     def _wire(self, point: str, target: object, ctx: BuildContext, where: str) -> None:
         """An output wired to an input of another module of the plant (its Device face;
@@ -86,7 +93,11 @@ class DiscreteDevice(ModuleDevice):
             raise ConfigError(f"{where}: {point!r} is not an output (allowed 0..F)") from None
         if not isinstance(target, Mapping) or not {"slot", "input"} <= set(target):
             raise ConfigError(f'{where}: a table {{ rack = 0, slot = 4, input = "sync" }}')
-        rack, slot, name = target.get("rack", 0), target["slot"], str(target["input"])
+        rack, slot, name = target.get("rack", 0), target["slot"], target["input"]
+        if not isinstance(name, str) or any(
+            isinstance(v, bool) or not isinstance(v, int) for v in (rack, slot)
+        ):
+            raise ConfigError(f'{where}: rack and slot are numbers, input a name ("sync")')
         found = [
             d
             for d in ctx.devices
