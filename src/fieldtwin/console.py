@@ -11,6 +11,8 @@ from collections.abc import Callable, Iterable
 from typing import ClassVar, TextIO
 
 from fieldtwin.clock import MS, S
+from fieldtwin.console_prog import HELP as PROG_HELP
+from fieldtwin.console_prog import is_internal, prog_command
 from fieldtwin.console_syntax import (
     canonical_name,
     integer,
@@ -62,6 +64,7 @@ HELP = {
     " | input I VALUE | signal I KIND key=value... | fault NAME on|off | faults | status | leds"
     " | power-cycle",
     "trace": f"{TRACE_USAGE}  the traffic on the wire; each advance shows its own",
+    "prog": PROG_HELP,
     "help": "help [COMMAND]",
     "quit": "quit",
 }
@@ -106,6 +109,7 @@ class Console:
             "tes": self._tes,
             "trace": self.trace.command,
             "help": self._help,
+            "prog": prog_command(lambda: self.plc),
         }
 
     @property
@@ -141,7 +145,7 @@ class Console:
 
     def _show(self, name: str) -> str:
         value = self.plc.read(name)
-        if name.upper().startswith("W"):
+        if name.upper().startswith("W") or is_internal(name):
             return str(value)
         ref = parse_object(name)
         return str(value) if ref.is_bit else format_hex(value)

@@ -123,6 +123,6 @@ def looks_like_object(token: str) -> bool:
 
 
 def canonical_name(name: str) -> str:
-    if name.upper().startswith("W"):
+    if name.upper().startswith(("W", "B", "X", "CW", "SY", "SW")):  # internal objects
         return name.upper()
     return format_object(parse_object(name))

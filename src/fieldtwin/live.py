@@ -17,6 +17,7 @@ from rich.text import Text
 from fieldtwin.clock import S
 from fieldtwin.devices.face import Device, DeviceStatus, TesAddress
 from fieldtwin.plant import Plant
+from fieldtwin.tsx.plc import Plc
 
 WIDE = 130  # a column per LED, the input bits in binary
 MEDIUM = 96  # one LED column, input bits in hex; below: input words on two lines
@@ -48,6 +49,8 @@ def _render(plant: Plant, endpoints: list[str], width: int) -> Group:
         plc = plant.plc
         title = f"{plc.model.name} {'RUN' if plc.running else 'STOP'}"
         parts.append(_modules(plant, _module_devices(plant), title, width))
+        if plc.program is not None:
+            parts.append(Text(program_line(plc), "green", overflow="fold"))
     tes = [d for d in plant.devices if isinstance(d.address, TesAddress)]
     if tes:
         parts.append(_tes_table(tes, width))
@@ -171,5 +174,30 @@ def plain_status(plant: Plant) -> list[str]:
         lines.append(
             f"slot {status.address} {status.kind}: {mode(status)} {status.leds_text()} IW {words}"
         )
+    if plc is not None and plc.program is not None:
+        lines.append(program_line(plc))
     lines.extend(tes_line(d) for d in plant.devices if isinstance(d.address, TesAddress))
     return lines
+
+
+def program_line(plc: Plc) -> str:
+    """The program's state: running / held / stopped, the active steps, chosen W words."""
+    program = plc.program
+    assert program is not None
+    if not plc.running:
+        state = "stopped"
+    elif program.held is not None:
+        state = f"held ({program.held})"
+    else:
+        state = "running"
+    steps = ",".join(program.active_steps()) if program.layout is not None else ""
+    if plc.watch == [f"W{i}" for i in range(8)]:
+        words = "W0..7 " + " ".join(f"{plc.read(w):04X}" for w in plc.watch)
+    else:
+        words = " ".join(f"{w}={plc.read(w):04X}" for w in plc.watch)
+    head = f"program {state}  task {program.cycles}"
+    if program.layout is not None:
+        head += f"  steps {steps or '-'}"
+    if program.faults:
+        head += f"  faults {len(program.faults)}"
+    return f"{head}  {words}" if plc.watch else head

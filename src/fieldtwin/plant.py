@@ -27,6 +27,7 @@ every port.  Errors name the file and the field path: ``plant.toml: module[1].sl
 
 from __future__ import annotations
 
+import re
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -45,12 +46,15 @@ from fieldtwin.errors import ConfigError
 from fieldtwin.runtime.events import EventBus
 from fieldtwin.tes.model import Tes
 from fieldtwin.tsx.plc import MODELS, Plc
+from fieldtwin.tsx.plcmemory import TxtDeclaration
+from fieldtwin.words import plant_word
 
 if TYPE_CHECKING:
     from fieldtwin.runtime.binder import Binding
     from fieldtwin.runtime.runner import Runner
 
 DEFAULT_PLANT = "default.toml"
+DEFAULT_NAME = "<default plant>"
 FROM_PLANT = "from plant"  # build_plant(speed=FROM_PLANT): take [run] speed
 TOP_LEVEL = ("plant", "plc", "module", "tes", "run")
 
@@ -148,7 +152,7 @@ def read_plant(path: str | Path | None) -> PlantFile:
     """Parse a plant file, or the embedded default plant when ``path`` is None."""
     if path is None:
         text = resources.files("fieldtwin").joinpath("plants", DEFAULT_PLANT).read_text("utf-8")
-        return _parse(text, "<default plant>", Path.cwd())
+        return _parse(text, DEFAULT_NAME, Path.cwd())
     p = Path(path)
     try:
         with p.open("rb") as file:
@@ -199,7 +203,7 @@ def build_plant(
     pace = plant_speed(plant_file) if speed == FROM_PLANT else speed
     assert not isinstance(pace, str)
     title = str(_table(data, "plant", name).get("name", Path(name).stem))
-    plc, outputs = _build_plc(plant_file, clock, runner, pace)
+    plc, outputs, program_keys = _build_plc(plant_file, clock, runner, pace)
     ctx = BuildContext(clock, plc, plant_file.base_dir, name)
     for key, family in (("module", Family.MODULE), ("tes", Family.TES)):
         for index, table in enumerate(_array(data, key, name)):
@@ -207,6 +211,7 @@ def build_plant(
     ctx.finish()
     if plc is not None:
         _initial_outputs(plc, outputs, f"{name}: plc.outputs")
+        _program(plc, program_keys, plant_file)
     return Plant(name, title, clock, plc, list(ctx.devices), speed=pace, notes=list(ctx.notes))
 
 
@@ -292,12 +297,13 @@ def _speed(value: object, where: str) -> float | None:
 
 def _build_plc(
     plant_file: PlantFile, clock: SimClock, runner: Runner | None, speed: float | None
-) -> tuple[Plc | None, object]:
-    """The PLC of ``[plc]`` (or of a plant with modules), and its ``outputs`` table."""
+) -> tuple[Plc | None, object, dict[str, object]]:
+    """The PLC of ``[plc]`` (or of a plant with modules), its ``outputs`` table and its
+    program keys (``program``, ``constants``, ``text_blocks``)."""
     data, name = plant_file.data, plant_file.name
     modules = _array(data, "module", name)
     if "plc" not in data and not modules:
-        return None, {}
+        return None, {}, {}
     plc_table = dict(_table(data, "plc", name))
     model = plc_table.pop("model", "TSX 87")
     if not isinstance(model, str) or model not in MODELS:
@@ -312,12 +318,132 @@ def _build_plc(
     ):
         raise ConfigError(f"{name}: plc.scan_ms: {scan_ms!r} not allowed (allowed 1..1000 ms)")
     outputs = plc_table.pop("outputs", {})
+    keys = {k: plc_table.pop(k) for k in PROGRAM_KEYS if k in plc_table}
     if plc_table:
         raise ConfigError(
             f"{name}: plc: unknown key(s) {', '.join(sorted(plc_table))}"
             " (allowed: model, scan_ms, outputs)"
+            f" and, for a program, {', '.join(PROGRAM_KEYS)}"
         )
-    return Plc(model=model, scan_ms=scan_ms, clock=clock, runner=runner, speed=speed), outputs
+    plc = Plc(model=model, scan_ms=scan_ms, clock=clock, runner=runner, speed=speed)
+    return plc, outputs, keys
+
+
+PROGRAM_KEYS = ("program", "constants", "text_blocks", "date", "watch")
+_TABLE_RE = re.compile(r"^(CW|W)(\d{1,4})$", re.IGNORECASE)
+
+
+def _program(plc: Plc, keys: Mapping[str, object], plant_file: PlantFile) -> None:
+    try:
+        _program_keys(plc, keys, plant_file)
+    except ConfigError as exc:
+        text, where = str(exc), f"{plant_file.name}: plc"
+        raise ConfigError(
+            text if text.startswith(plant_file.name) else f"{where}: {text}"
+        ) from None
+
+
+def _program_keys(plc: Plc, keys: Mapping[str, object], plant_file: PlantFile) -> None:
+    """``constants`` (CW words), ``text_blocks`` (how TXTi's tables are declared), then
+    ``program``: the PL7-3 file, relative to the plant file (docs/plant.md)."""
+    where = f"{plant_file.name}: plc"
+    constants = keys.get("constants", {})
+    if not isinstance(constants, Mapping):
+        raise ConfigError(f"{where}.constants: a table like {{ CW0 = [1, \"H'0802'\"] }}")
+    for start, values in constants.items():
+        at = f"{where}.constants.{start}"
+        first = _table_address(start, at, ("CW",))[1]
+        items = values if isinstance(values, list) else [values]
+        if first + len(items) > len(plc.cw):
+            raise ConfigError(f"{at}: {len(items)} words past CW{len(plc.cw) - 1}")
+        for k, value in enumerate(items):
+            plc.cw[first + k] = plant_word(value, f"{at}[{k}]")
+    blocks = keys.get("text_blocks", {})
+    if not isinstance(blocks, Mapping):
+        raise ConfigError(f'{where}.text_blocks: a table like {{ TXT0 = {{ indirect = "W20" }} }}')
+    for txt, decl in blocks.items():
+        plc.declare_text_block(*_declaration(txt, decl, f"{where}.text_blocks.{txt}"))
+    if "date" in keys:
+        date = _date(keys["date"], f"{where}.date")
+        try:
+            plc.set_calendar(*date)
+        except ConfigError as exc:
+            raise ConfigError(f"{where}.date: {exc}") from None
+    if "watch" in keys:
+        watch = keys["watch"]
+        if not isinstance(watch, list) or not all(isinstance(w, str) for w in watch):
+            raise ConfigError(f'{where}.watch: a list of objects, e.g. ["W0", "W1210"]')
+        for name in watch:
+            try:
+                plc.read(name)
+            except ConfigError as exc:
+                raise ConfigError(f"{where}.watch: {exc}") from None
+        plc.watch = [str(w).upper() for w in watch]
+    program = keys.get("program")
+    if program is None:
+        return
+    if not isinstance(program, str) or not program:
+        raise ConfigError(f'{where}.program: {program!r} is not a file name (e.g. "tank.pl7")')
+    path = plant_file.base_dir / program
+    embedded = resources.files("fieldtwin").joinpath("plants", Path(program).name)
+    try:
+        if plant_file.name != DEFAULT_NAME and path.exists():
+            text = path.read_text(encoding="utf-8")
+        elif program.endswith(".pl7") and embedded.is_file():  # fieldtwin's own programs
+            text, path = embedded.read_text("utf-8"), Path(program)
+        else:
+            text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ConfigError(f"{where}.program: {path}: cannot read ({exc.strerror})") from None
+    except ValueError:  # a NUL in the name
+        raise ConfigError(f"{where}.program: {program!r} is not a file name") from None
+    try:
+        plc.load_program(text, source=str(path))
+    except ConfigError as exc:
+        raise ConfigError(f"{where}.program: {exc}") from None
+
+
+_DATE_RE = re.compile(r"^(\d{4})-(\d{2})-(\d{2})[T ](\d{2}):(\d{2}):(\d{2})$")
+
+
+def _date(value: object, where: str) -> tuple[int, int, int, int, int, int]:
+    """``date = "1994-07-15T18:05:33"``: the PLC calendar (SW51..SW56) at the start."""
+    match = _DATE_RE.match(value) if isinstance(value, str) else None
+    if match is None:
+        raise ConfigError(f'{where}: {value!r} is not a date (e.g. "1994-07-15T18:05:33")')
+    y, mo, d, h, mi, s = (int(g) for g in match.groups())
+    return y, mo, d, h, mi, s
+
+
+def _table_address(text: object, where: str, kinds: tuple[str, ...]) -> tuple[str, int]:
+    match = _TABLE_RE.match(text) if isinstance(text, str) else None
+    if match is None or match.group(1).upper() not in kinds:
+        allowed = " or ".join(f"{k}i" for k in kinds)
+        raise ConfigError(f"{where}: {text!r} is not a word address (allowed: {allowed})")
+    return match.group(1).upper(), int(match.group(2))
+
+
+def _declaration(txt: str, decl: object, where: str) -> tuple[int, TxtDeclaration]:
+    match = re.match(r"^TXT(\d{1,2})$", txt, re.IGNORECASE)
+    if match is None:
+        raise ConfigError(f"{where}: {txt!r} is not a Text Block (allowed TXT0..TXT63)")
+    if not isinstance(decl, Mapping) or not set(decl) <= {"indirect", "send", "recv", "words"}:
+        raise ConfigError(f'{where}: a table of indirect = "Wi", or send = and recv = "Wi"')
+    indirect = send = recv = None
+    if "indirect" in decl:
+        indirect = _table_address(decl["indirect"], f"{where}.indirect", ("W",))[1]
+    if "send" in decl:
+        send = _table_address(decl["send"], f"{where}.send", ("W", "CW"))
+    if "recv" in decl:
+        recv = _table_address(decl["recv"], f"{where}.recv", ("W",))
+    words = decl.get("words")
+    if words is not None and (
+        isinstance(words, bool) or not isinstance(words, int) or not 1 <= words <= 127
+    ):
+        raise ConfigError(
+            f"{where}.words: {words!r} not allowed (the table's length, 1..127 words)"
+        )
+    return int(match.group(1)), TxtDeclaration(indirect, send, recv, words)
 
 
 def _initial_outputs(plc: Plc, outputs: object, where: str) -> None:

@@ -21,6 +21,7 @@ from fieldtwin.tsx import registry as plc_types
 ADAPTERS = (
     "fieldtwin.devices.aem811",
     "fieldtwin.devices.dem24",
+    "fieldtwin.devices.discrete",
     "fieldtwin.devices.scm",
     "fieldtwin.devices.tes",
 )

@@ -13,14 +13,27 @@ from __future__ import annotations
 import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TypeVar
 
 from fieldtwin.clock import MS, Handle, S, SimClock, seconds
 from fieldtwin.errors import ConfigError
+from fieldtwin.pl7.executor import Executor
+from fieldtwin.pl7.tree import Internal
 from fieldtwin.tsx import registry
 from fieldtwin.tsx.addressing import ObjectKind, ObjectRef, parse_object
 from fieldtwin.tsx.bus import Pacer
 from fieldtwin.tsx.module import BusImage, IntelligentModule, ModuleContext
+from fieldtwin.tsx.plcmemory import (
+    CONSTANT_WORDS,
+    INTERNAL_BITS,
+    SYSTEM_BITS,
+    SYSTEM_WORDS,
+    PlcMemory,
+    TxtDeclaration,
+    calendar_words,
+    days_from_civil,
+)
 from fieldtwin.tsx.textblock import ERR_MODULE_FAULT, ERR_POWER_BREAK
 from fieldtwin.tsx.txt import (
     DATA_WORDS,
@@ -62,6 +75,7 @@ MODELS = {
 
 POWER_RESERVE_US = 10 * MS  # a shorter break does not restart the modules (F-9)
 _W_RE = re.compile(r"^W(\d{1,5})$", re.IGNORECASE)
+_INTERNAL_RE = re.compile(r"^(XM|X|B|CW|SY|SW|W)(\d{1,5})(?:,([0-9A-F]))?$", re.IGNORECASE)
 
 
 ABSENT = BusImage((1 << 8,) + (0,) * 7, 0, True)  # what an empty slot reads
@@ -102,6 +116,15 @@ class Plc:
         self.cycles = 0
         self.txt = TextBlocks(self.model.table_max, self.model.report_name, self._lookup)
         self.data = self.txt.data  # internal words W0..W4095
+        self.bits = [0] * INTERNAL_BITS  # B0..B4095
+        self.cw = [0] * CONSTANT_WORDS  # CW0..CW4095 (the plant file's constants)
+        self.sy = [0] * SYSTEM_BITS  # SY0..SY127
+        self.sw = [0] * SYSTEM_WORDS  # SW0..SW127
+        self.memory = PlcMemory(self)
+        self.program: Executor | None = None
+        self.program_source = ""
+        self.watch = [f"W{i}" for i in range(8)]  # the words the live view shows
+        self.calendar_epoch_s: int | None = None  # SW51..SW56 at simulated time 0
         self._slots: dict[tuple[int, int], _Slot] = {}
         self._scan: Handle | None = self.clock.call_later(self.scan_us, self._end_of_task)
 
@@ -263,6 +286,12 @@ class Plc:
         if not self._powered:
             return
         self.cycles += 1
+        program = self.program
+        if program is not None and self.running:  # PRE, CHART, POST on the input image
+            if self.calendar_epoch_s is not None:
+                for word, value in calendar_words(self.calendar_epoch_s + now // S).items():
+                    self.sw[word] = value
+            program.run_master_task(now)
         registers = self.cycles % self.model.register_every == 0
         for entry in self._slots.values():
             self._refresh(entry, registers, now)
@@ -299,14 +328,18 @@ class Plc:
             entry.module.power_off()
         self._end_exchanges(ERR_POWER_BREAK)
         for entry in self._slots.values():
-            entry.ow = [0] * 8
+            entry.ow[:] = [0] * 8  # in place: a program's compiled cells are these lists
             entry.o_bits = 0
         for entry in present:
             entry.module.power_on()
+        if self.program is not None:  # SY0; internal bits and words cleared
+            self.program.cold_restart()
         self.running = True
 
     def hot_restart(self) -> None:
-        """SY1: the program resumes; modules keep their state."""
+        """SY1: the program resumes; modules and internal objects keep their state."""
+        if self.program is not None:
+            self.program.hot_restart()
         self.running = True
 
     def power_break(self, duration_s: float) -> None:
@@ -347,6 +380,9 @@ class Plc:
         w = self._w_address(name)
         if w is not None:
             return self.data[w]
+        internal = self._internal(name)
+        if internal is not None:
+            return internal()
         ref = parse_object(name)
         entry = self._entry(ref.rack, ref.slot)
         if ref.kind is ObjectKind.FAULT:
@@ -373,6 +409,10 @@ class Plc:
         if w is not None:
             self.data[w] = to_unsigned(value)
             return
+        match = _INTERNAL_RE.match(name.strip())
+        if match is not None:
+            self._write_internal(name, match, value)
+            return
         ref = parse_object(name)
         entry = self._entry(ref.rack, ref.slot)
         if ref.kind is ObjectKind.OW:
@@ -396,6 +436,81 @@ class Plc:
             entry.o_bits = set_bit(entry.o_bits, _index(ref), _bit_value(name, value))
             return
         raise ConfigError(f"{name!r} is an input: only OWxy,i, OWxy,i,j and Oxy,i can be written")
+
+    # --- the program (fieldtwin.pl7) ------------------------------------------------
+
+    def load_program(self, path_or_text: str | Path, source: str = "") -> Executor:
+        """Load a PL7-3 program (a file's path, or its text): a cold restart of the
+        program (SY0, internal bits and words cleared; docs/pl7.md); it runs at every
+        master task from now on.  A refused program is a Pl7Error (line, column, token)."""
+        text, name = _program_text(path_or_text)
+        executor = Executor.from_source(text, self.memory, source=source or name)
+        self.program, self.program_source = executor, text
+        return executor
+
+    def set_calendar(
+        self, year: int, month: int, day: int, hour: int = 0, minute: int = 0, second: int = 0
+    ) -> None:
+        """The PLC's date and time now (SW51..SW56 follow simulated time from here)."""
+        if not (1980 <= year <= 2079 and 1 <= month <= 12 and 1 <= day <= 31):
+            raise ConfigError(f"date {year}-{month}-{day} not allowed (1980..2079)")
+        if not (0 <= hour < 24 and 0 <= minute < 60 and 0 <= second < 60):
+            raise ConfigError(f"time {hour}:{minute}:{second} not allowed")
+        epoch = days_from_civil(year, month, day) * 86400 + hour * 3600 + minute * 60 + second
+        self.calendar_epoch_s = epoch - self.clock.now // S
+
+    def unload_program(self) -> None:
+        self.program = None
+        self.program_source = ""
+
+    def declare_text_block(self, index: int, declaration: TxtDeclaration) -> None:
+        """How TXTi's tables are declared (configuration mode): see plcmemory."""
+        self.txt.block(index)  # ConfigError past TXT63
+        self.memory.declarations[index] = declaration
+
+    def slot_entry(self, rack: int, slot: int) -> _Slot:
+        """The slot's images (the program's module objects)."""
+        return self._entry(rack, slot)
+
+    def _internal(self, name: str) -> Callable[[], int] | None:
+        match = _INTERNAL_RE.match(name.strip())
+        if match is None:
+            return None
+        kind, index, bit = match.group(1).upper(), int(match.group(2)), match.group(3)
+        if kind in ("X", "XM"):
+            program = self.program
+            if program is None or program.layout is None:
+                raise ConfigError(f"{name!r}: the PLC runs no program with a chart")
+            if kind == "X":
+                return lambda: int(program.step_active(str(index)))
+            cells, at = program.step_cells(Internal("XM", index))
+            return lambda: int(any(cells[k] for k in at))
+        table = self._internal_table(name, kind, index)
+        if bit is None:
+            return lambda: table[index]
+        b = int(bit, 16)
+        return lambda: (table[index] >> b) & 1
+
+    def _internal_table(self, name: str, kind: str, index: int) -> list[int]:
+        tables = {"B": self.bits, "CW": self.cw, "SY": self.sy, "SW": self.sw, "W": self.data}
+        table = tables[kind]
+        if index >= len(table):
+            raise ConfigError(f"{name!r}: out of range (allowed {kind}0..{kind}{len(table) - 1})")
+        return table
+
+    def _write_internal(self, name: str, match: re.Match[str], value: int) -> None:
+        kind, index, bit = match.group(1).upper(), int(match.group(2)), match.group(3)
+        if kind in ("X", "XM"):
+            raise ConfigError(f"{name!r} is a step: the chart sets it (allowed: B, W, CW, SY, SW)")
+        table = self._internal_table(name, kind, index)
+        if kind in ("B", "SY") or bit is not None:
+            v = _bit_value(name, value)
+            if bit is None:
+                table[index] = v
+            else:
+                table[index] = set_bit(table[index], int(bit, 16), v)
+            return
+        table[index] = to_unsigned(value)
 
     def _w_address(self, name: str) -> int | None:
         match = _W_RE.match(name.strip())
@@ -498,6 +613,20 @@ class Plc:
 
     def output_words(self, rack: int, slot: int) -> list[int]:
         return list(self._entry(rack, slot).ow)
+
+
+def _program_text(path_or_text: str | Path) -> tuple[str, str]:
+    """A program's text and its name: a Path, or a str naming an existing .pl7 file,
+    is read; any other str is the program itself."""
+    if isinstance(path_or_text, str) and ("\n" in path_or_text or "%" in path_or_text):
+        return path_or_text, ""
+    path = Path(path_or_text)
+    if isinstance(path_or_text, Path) or path.suffix.lower() == ".pl7" or path.exists():
+        try:
+            return path.read_text(encoding="utf-8"), str(path)
+        except OSError as err:
+            raise ConfigError(f"{path}: cannot read the program ({err.strerror})") from None
+    return str(path_or_text), ""
 
 
 def _index(ref: ObjectRef) -> int:
