@@ -87,11 +87,12 @@ def test_poll_sees_an_input_a_fault_on_one_tes_only_and_a_power_cycle(
 def test_a_text_block_exchange_through_the_api_on_the_aem(plant: Running) -> None:
     with Client(plant.url) as api:
         until(lambda: api.status("5")["state"] == "operational", "AEM self-test over", 20)
-        started = api.start_exchange(0x0563, 0x49, text="TANK FARM")
+        # TXT7: the default plant's program uses TXT0 for its own configuration (AEM 5.1)
+        started = api.start_exchange(0x0563, 0x49, text="TANK FARM", txt=7)
         assert started["id"] >= 1 and started["m"] == "H'0563'" and started["c"] == "H'49'"
         done = api.wait_exchange(started["id"], WAIT_S)
         assert done["result"]["E"] == 0, done
-        read = api.wait_exchange(api.start_exchange(0x0563, 0x4A, recv=20)["id"], WAIT_S)
+        read = api.wait_exchange(api.start_exchange(0x0563, 0x4A, recv=20, txt=7)["id"], WAIT_S)
         result = read["result"]
         assert set(result) >= {"V", "S", "E", "words", "data"}
         assert result["E"] == 0 and result["S"] == 20

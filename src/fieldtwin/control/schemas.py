@@ -49,7 +49,7 @@ class ExchangeBody(Closed):
     text: Annotated[str, Field(max_length=MAX_TEXT)] | None = None
     length: Annotated[int, Field(ge=0, le=MAX_TEXT)] | None = None
     recv: Annotated[int, Field(ge=0, le=2 * MAX_SEND_WORDS)] = 0
-    txt: Annotated[int, Field(ge=0, le=255)] = 0
+    txt: Annotated[int, Field(ge=0, le=63)] = 0  # TXT0..TXT63 (AEM 3.5-1: N/MAX 64)
 
 
 class PowerBreakBody(Closed):
