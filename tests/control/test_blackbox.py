@@ -11,7 +11,7 @@ from pathlib import Path
 import httpx
 import pytest
 from pymodbus.client import ModbusTcpClient
-from pymodbus.exceptions import ModbusIOException
+from pymodbus.exceptions import ConnectionException, ModbusIOException
 
 from fieldtwin.client import Client, ControlError
 from tests.control.plantproc import ROOT, Running, default_plant_copy, fieldtwin_run
@@ -47,7 +47,7 @@ def until(check: Callable[[], bool], what: str, wait_s: float = WAIT_S) -> None:
 def word(master: ModbusTcpClient, slave: int, address: int) -> int | None:
     try:
         reply = master.read_holding_registers(address, count=1, device_id=slave)
-    except ModbusIOException:  # no answer within the master's timeout
+    except (ModbusIOException, ConnectionException):  # no answer, or the connection closed
         return None
     return None if reply.isError() else int(reply.registers[0])
 
@@ -246,3 +246,39 @@ def test_the_event_stream_filters_by_kind_and_device(plant: Running) -> None:
         assert seen == ["paused", "resumed"]
         events.close()
         clocks.close()
+
+
+def test_drop_connections_closes_the_masters_connection_and_it_can_reconnect(
+    plant: Running,
+) -> None:
+    master = ModbusTcpClient("127.0.0.1", port=plant.modbus_port, timeout=1, retries=0)
+    assert master.connect()  # type: ignore[no-untyped-call]
+    try:
+        assert word(master, 2, 0x000) is not None
+        with Client(plant.url) as api:
+            assert "drop_connections" in [f["name"] for f in api.faults("tes2")]
+            api.set_fault("tes2", "drop_connections")
+            assert word(master, 2, 0x000) is None  # this connection was closed under it
+            fresh = ModbusTcpClient("127.0.0.1", port=plant.modbus_port, timeout=1, retries=0)
+            assert fresh.connect()  # type: ignore[no-untyped-call]
+            try:
+                assert word(fresh, 2, 0x000) is not None  # the endpoint still listens
+            finally:
+                fresh.close()  # type: ignore[no-untyped-call]
+    finally:
+        master.close()  # type: ignore[no-untyped-call]
+
+
+def test_register_writes_and_dem_messages_are_events(
+    plant: Running, master: ModbusTcpClient
+) -> None:
+    with Client(plant.url) as api:
+        registers = api.events(["register"], timeout_s=WAIT_S)
+        assert not master.write_register(0x000, 0, device_id=2).isError()
+        event = next(registers)
+        assert (event["device"].split()[-1], event["address"], event["values"]) == ("2", 0, [0])
+        registers.close()
+        dem = api.events(["dem"], ["4"], timeout_s=90)  # time set by the pulse at 60 s
+        first = next(dem)
+        assert first["type"] in ("change", "overall") and first["stamp"].startswith("1994-07-15")
+        dem.close()

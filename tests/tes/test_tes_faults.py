@@ -62,6 +62,7 @@ def test_fault_names_are_described_per_model() -> None:
         "bad_crc",
         "broken_character",
         "not_ready",
+        "drop_connections",
         "power_off",
     }
     assert all(isinstance(text, str) and text for text in plain.values())
@@ -173,3 +174,14 @@ def test_wiring_faults_by_name_like_the_plant_keys() -> None:
     tes.inject_fault("short_3", False)
     tes.inject_fault("open_17", False)
     assert tes.peek(0x1A9) == 0 and tes.peek(0x1AA) == 0
+
+
+def test_drop_connections_is_refused_where_no_tcp_endpoint_serves_the_tes() -> None:
+    tes = Tes("TES 8EA")
+    with pytest.raises(ConfigError, match="not served on a TCP endpoint"):
+        tes.inject_fault("drop_connections", True)
+    closed: list[str] = []
+    tes.line_faults.droppers.append(lambda: closed.append("x") or 1)
+    tes.inject_fault("drop_connections", True)
+    tes.inject_fault("drop_connections", False)  # a one-shot: clearing does nothing
+    assert closed == ["x"] and "drop_connections" not in tes.active_faults()

@@ -191,3 +191,40 @@ def test_a_scm_tcp_channel_remembers_a_bounded_number_of_peers() -> None:
         _connected(port, Peer(f"peer {i}"))
     assert len(port.connections) == MAX_CONNECTION_NAMES
     assert port.connections[-1] == "peer 999"
+
+
+def test_a_write_the_tes_answered_is_a_register_event_a_refused_one_is_not() -> None:
+    wiretap, events, (a, b) = tap()
+    stream = wiretap.stream("c")
+    stream.inbound(mbap(1, 2, bytes.fromhex("100010000204000a000b")), 5)  # FC16 2 words
+    stream.outbound(mbap(1, 2, bytes.fromhex("1000100002")), 9)
+    registers = [e for e in events if e.kind == "register"]
+    assert [
+        (r.t_us, r.device, r.data["tes"], r.data["address"], r.data["values"]) for r in registers
+    ] == [(9, "tcp://x 2", "B", 16, [10, 11])]
+    stream.inbound(mbap(2, 1, bytes.fromhex("0600050007")), 20)  # FC06 refused by the TES
+    stream.outbound(mbap(2, 1, bytes.fromhex("8602")), 21)
+    stream.inbound(mbap(3, 1, bytes.fromhex("0300000001")), 30)  # a read writes nothing
+    stream.outbound(mbap(3, 1, bytes.fromhex("03020000")), 31)
+    stream.inbound(mbap(4, 1, bytes.fromhex("050003ff00")), 40)  # FC05 a bit
+    stream.outbound(mbap(4, 1, bytes.fromhex("050003ff00")), 41)
+    registers = [e for e in events if e.kind == "register"]
+    assert [(r.data["table"], r.data["address"], r.data["values"]) for r in registers] == [
+        ("words", 16, [10, 11]),
+        ("bits", 3, [1]),
+    ]
+
+
+def test_an_rtu_broadcast_write_is_a_register_event_of_every_tes_that_executed_it() -> None:
+    wiretap, events, (a, b) = tap(Link.RS485, rtu=True)
+    timing = wiretap.timing
+    assert timing is not None
+    a.powered = False
+    stream = wiretap.stream("pty")
+    frame = with_crc(bytes.fromhex("000600010005"))
+    stream.inbound(frame, 0)
+    stream.poll(timing.t35_us + len(frame) * timing.char_us)
+    registers = [e for e in events if e.kind == "register"]
+    assert [(r.device, r.data["tes"], r.data["values"]) for r in registers] == [
+        ("rtu://x 2", "B", [5])
+    ]

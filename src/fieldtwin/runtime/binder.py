@@ -18,7 +18,9 @@ the ``scm`` group only, leaving the TES's Modbus endpoints closed.
 from __future__ import annotations
 
 from collections.abc import Callable, Collection, Sequence
+from functools import partial
 
+from fieldtwin.devices.dem24 import Dem24Device
 from fieldtwin.devices.face import Device, Port
 from fieldtwin.devices.scm import GROUP as SERIAL_LINE
 from fieldtwin.devices.scm import ScmDevice
@@ -30,6 +32,7 @@ from fieldtwin.runtime.modbus_server import ModbusServer
 from fieldtwin.runtime.runner import Runner
 from fieldtwin.runtime.wiretap import CharTap
 from fieldtwin.transports.url import parse_endpoint
+from fieldtwin.tsx.dem24.stack import Message, MessageType
 from fieldtwin.tsx.scm.endpoints import MemoryPeer
 
 ALL = (MODBUS, SERIAL_LINE)
@@ -67,6 +70,8 @@ def bind(
             _serve_modbus(devices, runner, binding, events)
         if SERIAL_LINE in groups:
             _attach_channels(devices, binding, events)
+        if events is not None:
+            _tap_logbooks(devices, binding, events)
     except BaseException:
         binding.close()
         raise
@@ -94,6 +99,11 @@ def _serve_modbus(
         if events is not None:
             server.tap(events, url)
         binding.add([server.describe()], server.close)
+        if server.kind != "modbus-rtu":  # a TCP endpoint: the drop_connections fault
+            for member in members:
+                droppers = member.tes.line_faults.droppers
+                droppers.append(server.drop_connections)
+                binding.add([], partial(droppers.remove, server.drop_connections))
 
 
 def _attach_channels(devices: Sequence[Device], binding: Binding, events: EventBus | None) -> None:
@@ -116,6 +126,43 @@ def _tap_channels(device: ScmDevice, events: EventBus) -> None:
         wired.tap = tap
         if isinstance(wired.peer, MemoryPeer):
             wired.peer.tap = tap
+
+
+KIND_DEM = "dem"
+
+
+def _tap_logbooks(devices: Sequence[Device], binding: Binding, events: EventBus) -> None:
+    """Every DEM's logbook publishes each message as it is logged (or lost, stack full)."""
+    for device in devices:
+        if isinstance(device, Dem24Device):
+            logbook = device.dem.logbook
+            logbook.tap = _dem_tap(device, events)
+            binding.add([], partial(setattr, logbook, "tap", None))
+
+
+def _dem_tap(device: Dem24Device, events: EventBus) -> Callable[[Message, bool, bool, int], None]:
+    address, clock = str(device.address), device.dem.clock
+
+    def tap(message: Message, stored: bool, flagged: bool, fill: int) -> None:
+        if not events.active:
+            return
+        change = message.type is MessageType.CHANGE
+        data: dict[str, object] = {
+            "type": "change" if change else "overall",
+            "stamp": str(message.stamp),
+            "h": message.h,
+            "indicator": message.indicator,
+            "stored": stored,
+            "overflow": flagged,
+            "stack": fill,
+        }
+        if change:
+            data["channel"], data["state"] = message.channel, message.state
+        else:
+            data["words"] = [f"{w:04X}" for w in message.body]
+        events.publish(clock.now, KIND_DEM, address, data)
+
+    return tap
 
 
 def _detacher(device: ScmDevice, port: Port) -> Callable[[], None]:

@@ -192,6 +192,15 @@ class ModbusServer:
         """Open transports served (TCP connections, or the one RTU line)."""
         return sum(not pump.transport.closed for pump in self.pumps.values())
 
+    def drop_connections(self) -> int:
+        """Close every connection served now (a TCP endpoint; the listener stays open)."""
+        if self._listener is None:
+            return 0
+        pumps = list(self.pumps.values())
+        for pump in pumps:
+            pump.close()
+        return len(pumps)
+
     def close(self) -> None:
         """Stop listening and close every transport this server serves."""
         self.closed = True

@@ -45,6 +45,7 @@ from fieldtwin.runtime.events import EventBus
 
 KIND_MODBUS = "modbus"
 KIND_SERIAL = "serial"
+KIND_REGISTER = "register"
 IN, OUT = "in", "out"
 MAX_BLOCK = 1024  # characters of one SCM block an event carries (the count says the rest)
 BLOCK_GAP_US = 5 * MS  # a quieter line ends an SCM block (about 4 characters at 9600 Bd)
@@ -95,6 +96,22 @@ def request_fields(pdu: bytes) -> dict[str, object]:
     else:
         assert isinstance(request, ReadExceptionStatus)
     return out
+
+
+def written(pdu: bytes) -> tuple[str, int, list[int]] | None:
+    """(bits or words, address, values) a write request PDU writes; None for the others."""
+    if not pdu or pdu[0] not in WRITE_FUNCTIONS:
+        return None
+    request = decode_request(pdu)
+    if isinstance(request, WriteBit):
+        return "bits", request.address, [int(request.value)]
+    if isinstance(request, WriteWord):
+        return "words", request.address, [request.value]
+    if isinstance(request, WriteBits):
+        return "bits", request.address, [int(v) for v in request.values]
+    if isinstance(request, WriteWords):
+        return "words", request.address, list(request.values)
+    return None  # refused: nothing is written
 
 
 def reply_fields(pdu: bytes) -> dict[str, object]:
@@ -171,7 +188,7 @@ class Stream:
             fields: dict[str, object] = {"transaction": frame.transaction, "hex": raw.hex()}
             fields.update(request_fields(frame.pdu))
             fields["tes"] = self.tap.outcomes(frame.unit, frame.pdu, rtu=False)
-            self._remember(frame.transaction, frame.unit, fields)
+            self._remember(frame.transaction, frame.unit, fields, frame.pdu)
             self._publish(now, IN, frame.unit, fields)
 
     def _tcp_out(self, data: bytes, now: int) -> None:
@@ -179,8 +196,10 @@ class Stream:
             return
         transaction, unit, pdu = (data[0] << 8) | data[1], data[6], data[7:]
         fields: dict[str, object] = {"transaction": transaction, "hex": data.hex()}
+        write = self._pending.get(transaction, {}).get("_pdu")
         fields.update(self._reply(transaction, unit, pdu))
         self._publish(now, OUT, unit, fields)
+        self._register(now, unit, write, pdu, fields)
 
     # -- Modbus RTU ------------------------------------------------------------------
 
@@ -198,23 +217,64 @@ class Stream:
             fields = {"crc": "good", "hex": event.data.hex()}
             fields.update(request_fields(pdu))
             fields["tes"] = self.tap.outcomes(slave, pdu, rtu=True)
-            self._remember(slave, slave, fields)
+            self._remember(slave, slave, fields, pdu)
             self._publish(event.at, IN, slave, fields)
+            if slave == BROADCAST:  # executed by every TES that heard it, never answered
+                self._broadcast(event.at, pdu, fields)
 
     def _rtu_out(self, data: bytes, now: int) -> None:
         if len(data) < 4:
             return
         slave = data[0]
         fields: dict[str, object] = {"crc": "good" if crc_ok(data) else "bad", "hex": data.hex()}
+        write = self._pending.get(slave, {}).get("_pdu")
         fields.update(self._reply(slave, slave, data[1:-2]))
         self._publish(now, OUT, slave, fields)
+        self._register(now, slave, write, data[1:-2], fields)
 
     # -- both ------------------------------------------------------------------------
 
-    def _remember(self, key: int, unit: int, fields: dict[str, object]) -> None:
+    def _remember(self, key: int, unit: int, fields: dict[str, object], pdu: bytes) -> None:
         if len(self._pending) >= MAX_PENDING:
             self._pending.pop(next(iter(self._pending)))
         self._pending[key] = {"unit": unit, **fields}
+        if pdu and pdu[0] in WRITE_FUNCTIONS:
+            self._pending[key]["_pdu"] = pdu
+
+    def _register(
+        self, now: int, unit: int, request: object, reply: bytes, fields: dict[str, object]
+    ) -> None:
+        """A write the TES answered without an exception: a ``register`` event."""
+        if not isinstance(request, bytes) or not reply or reply[0] & EXCEPTION_FLAG:
+            return
+        device = self.tap.slaves.get(unit)
+        if device is not None:
+            self._wrote(now, unit, device_name(device), request)
+
+    def _broadcast(self, now: int, pdu: bytes, fields: dict[str, object]) -> None:
+        outcomes = fields.get("tes")
+        if not isinstance(outcomes, dict):
+            return
+        for device in self.tap.slaves.devices:
+            if outcomes.get(device_name(device)) == BROADCAST_EXECUTED:
+                self._wrote(now, self.tap.slaves.number_of(device), device_name(device), pdu)
+
+    def _wrote(self, now: int, unit: int, name: str, pdu: bytes) -> None:
+        what = written(pdu)
+        if what is None:
+            return
+        table, address, values = what
+        data: dict[str, object] = {
+            "endpoint": self.tap.endpoint,
+            "conn": self.conn,
+            "slave": unit,
+            "tes": name,
+            "function": pdu[0],
+            "table": table,
+            "address": address,
+            "values": values,
+        }
+        self.tap.bus.publish(now, KIND_REGISTER, f"{self.tap.endpoint} {unit}", data)
 
     def _reply(self, key: int, unit: int, pdu: bytes) -> dict[str, object]:
         fields = reply_fields(pdu)

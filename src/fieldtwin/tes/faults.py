@@ -65,6 +65,11 @@ LINE_FAULTS = (
         f" only; window_ms = 0..<{NOT_READY_WINDOW_MAX_MS}: during each 100 ms buffer refresh",
         ("count", "window_ms"),
     ),
+    FaultSpec(
+        "drop_connections",
+        "every TCP connection this TES is reached through (tcp://, rtu+tcp://) is closed now;"
+        " a one-shot: nothing stays in force, the master may connect again at once",
+    ),
 )
 POWER_FAULT = FaultSpec("power_off", "24 V removed: no answer, RAM lost; cleared: power on (§1)")
 
@@ -118,6 +123,9 @@ class LineFaults:
         self.not_ready_always = False
         self.not_ready_left = 0  # the next N requests in the 32-bit area
         self.not_ready_window_us = 0  # each 100 ms the TES refreshes its 32-bit buffers this long
+        # who closes the TCP connections this TES is reached through (set by the endpoint
+        # binder while it serves the TES; each returns how many it closed)
+        self.droppers: list[Callable[[], int]] = []
 
     def active(self) -> dict[str, dict[str, Param]]:
         """The line faults in force, with their parameters."""
@@ -232,8 +240,20 @@ class FaultSurface:
             self._late(on, params)
         elif spec.name == "not_ready":
             self._not_ready(on, params)
+        elif spec.name == "drop_connections":
+            if on:
+                self._drop()
         else:  # bad_crc, broken_character
             self._line.set_corrupt(state.LineFault(spec.name), on, _count(params), self._link)
+
+    def _drop(self) -> None:
+        if not self._line.droppers:
+            raise ConfigError(
+                "fault 'drop_connections': this TES is not served on a TCP endpoint"
+                " (tcp:// or rtu+tcp://) by this run"
+            )
+        for drop in list(self._line.droppers):
+            drop()
 
     def _wiring(self, name: str, on: bool) -> None:
         kind, _, index = name.partition("_")

@@ -23,6 +23,8 @@ from fieldtwin.tsx.dem24.timebase import SyncOutcome, Timebase, TimeReference
 MINUTE_MS = 60_000
 
 Schedule = Callable[[int, Callable[[int], None]], Handle]
+# (message as offered, stored?, flagged as following a loss?, messages in the stack after)
+LogTap = Callable[[Message, bool, bool, int], None]
 
 
 class Logbook:
@@ -53,6 +55,7 @@ class Logbook:
         self._periodic: Handle | None = None
         self._periodic_due_ms: int | None = None
         self._loss: Handle | None = None
+        self.tap: LogTap | None = None  # an observer of every message offered (the event bus)
 
     def reset(self, drift_ppm: float) -> None:
         """DEM 2.5-3 power-up: no protected memory, time and messages are lost."""
@@ -88,7 +91,12 @@ class Logbook:
             body,
         )
         stack = self.stack
-        stack.push(message)  # DEM 2.3-4: lost when full, flagged in the next one
+        tap = self.tap
+        if tap is None:
+            stack.push(message)  # DEM 2.3-4: lost when full, flagged in the next one
+        else:
+            flagged = bool(stack.lost) and not stack.full
+            tap(message, stack.push(message), flagged, len(stack))
         return stack.full
 
     def read(self, count: int) -> list[Message]:
