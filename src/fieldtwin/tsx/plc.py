@@ -343,7 +343,10 @@ class Plc:
         self.running = True
 
     def power_break(self, duration_s: float) -> None:
-        """Cut the PLC supply for ``duration_s`` (simulated)."""
+        """Cut the PLC supply for ``duration_s`` (simulated).  A break longer than the
+        power reserve ends in a hot restart: SY1 reads 1 during the first master task,
+        internal objects are kept and the modules must be reconfigured (AEM 2.5-3,
+        DEM 2.5-3 "on a warm restart, when the power reserve has been exhausted")."""
         if not 0 <= duration_s * S < float("inf"):
             raise ConfigError(f"power break of {duration_s} s not allowed (allowed 0 or more)")
         duration = seconds(duration_s)
@@ -362,6 +365,8 @@ class Plc:
             for entry in present:
                 entry.module.power_on()
         self._read_inputs()
+        if long_break and self.program is not None:  # AEM 2.5-3, DEM 2.5-3: SY1 = 1
+            self.program.hot_restart()
 
     def _read_inputs(self) -> None:
         """Power return: the input image is read again from the modules at once, so

@@ -51,6 +51,21 @@ def test_hot_restart_keeps_internal_objects_cold_restart_clears_them() -> None:
     assert plc.read("CW3") == 9
 
 
+def test_a_power_break_beyond_the_reserve_is_a_hot_restart_a_short_one_is_not() -> None:
+    plc = Plc()
+    plc.load_program(COUNTER)
+    plc.advance(0.05)
+    plc.power_break(0.005)  # within the 10 ms reserve: the program never notices
+    plc.advance(0.01)
+    assert plc.read("B2") == 0
+    counted = plc.read("W12")
+    plc.power_break(1.0)  # the reserve is exhausted: a hot restart on power return
+    plc.advance(0.01)
+    assert plc.read("B2") == 1  # SY1 was 1 during the first master task
+    assert plc.read("B1") == 1 and plc.read("W12") == counted + 1  # internal objects kept
+    assert plc.read("SY1") == 0  # reset by the system at the end of that task
+
+
 def test_stop_holds_the_program() -> None:
     plc = Plc()
     plc.load_program(COUNTER)
