@@ -92,3 +92,15 @@ def test_a_plc_without_the_modules_the_program_names_refuses_it() -> None:
     plc.insert("TSX AEM 811", 0, 5)
     with pytest.raises(ConfigError, match="no module in rack 1 slot 4"):
         plc.load_program(TANK)
+
+
+def test_after_a_power_break_the_program_configures_the_module_again() -> None:
+    plc, mod, _ = tank_plc()
+    plc.advance(12.0)
+    assert plc.read("IW5,2,D") == 0 and plc.read("B3") == 1
+    plc.power_break(1.0)  # beyond the reserve: the AEM lost its configuration (2.5-3)
+    plc.advance(0.5)
+    assert plc.read("IW5,2,D") == 1  # the default configuration, until the program acts
+    plc.advance(12.0)  # the self-test, then SR0 and SR1 again on IW5,2,D
+    assert plc.read("IW5,2,D") == 0 and plc.read("IW5,0,C") == 1
+    assert mod.thresholds.values == [TANK_THRESHOLD_0, TANK_THRESHOLD_1]
