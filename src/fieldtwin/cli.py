@@ -166,10 +166,16 @@ def _run(args: argparse.Namespace) -> int:
     clock = SimClock()
     runner = Runner(clock, speed)
     plant = build_plant(plant_file, runner=runner, speed=speed)
+    control: Launched | None = None
     try:
         recorders = _recorders(args, plant.events)  # before any port opens: no frame is missed
+        # the control API starts before any port opens: its imports and its server's start
+        # take a second, and a master connecting at the `running` line must be served
+        control = _start_control(args, plant, runner, plant.events)
         binding = bind(plant.devices, runner, events=plant.events)  # every port, once built
     except BaseException:
+        if control is not None:
+            control.close()
         plant.close()
         raise
     plant.bindings.append(binding)
@@ -185,12 +191,12 @@ def _run(args: argparse.Namespace) -> int:
         f"running {plant.title} at {'max speed' if speed is None else f'x{speed:g}'}",
         flush=True,
     )
-    try:  # after the `running` line: its lines come once the API is up
+    if control is not None:  # after the `running` line; the API is up already
         # one bus for every window onto the plant: the API's stream sees the traffic too
-        control = _start_control(args, plant, runner, plant.events)
-    except BaseException:
-        plant.close()
-        raise
+        for line in control.lines:
+            print(line, flush=True)
+        for warning in control.warnings:
+            print(warning, file=sys.stderr, flush=True)
     signal.signal(signal.SIGTERM, lambda *_: runner.stop())
     live = sys.stdout.isatty() and not args.no_live
     end = None if args.duration is None else clock.now + round(args.duration * S)
@@ -251,7 +257,7 @@ def _recorders(args: argparse.Namespace, events: EventBus) -> Binding:
 def _start_control(
     args: argparse.Namespace, plant: Plant, runner: Runner, bus: EventBus
 ) -> Launched | None:
-    """The control API (docs/control.md), unless --no-control; prints its lines."""
+    """The control API (docs/control.md), unless --no-control; its lines are printed later."""
     if args.no_control:
         return None
     from fieldtwin.control.launch import launch
@@ -264,10 +270,6 @@ def _start_control(
         port=args.control_port,
         token=args.control_token,
     )
-    for line in launched.lines:
-        print(line, flush=True)
-    for warning in launched.warnings:
-        print(warning, file=sys.stderr, flush=True)
     return launched
 
 
