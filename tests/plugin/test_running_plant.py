@@ -260,3 +260,29 @@ def test_start_plant_without_pytest(tmp_path: Path) -> None:
     assert pid is not None and gone(pid)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["p.toml"]
     assert os.environ.get("FIELDTWIN_TEST_PARENT") is None
+
+
+def test_the_default_plant_runs_with_its_channels_and_its_modbus_endpoint() -> None:
+    from fieldtwin.testing import assert_leds, assert_object, assert_state, start_plant
+
+    with start_plant() as running:
+        tes = running.modbus(2)
+        assert tes.slaves == (1, 2) and tes.declared == "tcp://127.0.0.1:5020"
+        assert tes.port not in (0, 5020)
+        channel = running.channel("7", 1)
+        assert channel.what == "TSX SCM 2111 slot 7 channel 1" and channel.url.startswith("/dev/")
+        with pytest.raises(Exception, match=r"no endpoint for slot 7 channel 2 \(have: "):
+            running.channel("7", 2)
+        assert_state(running, "on", device="tes1")
+        assert_leds(running, {"Pwr": "on"}, device="tes1")
+        assert_object(running, "OW4,2", 0x000F)  # a PLC object, through the console
+        with pytest.raises(
+            AssertionError,
+            match=r"OW4,2 of running plant \(the default plant\):"
+            r" expected 1, actual 15 \(H'000F'\) at t = ",
+        ):
+            assert_object(running, "OW4,2", 1)
+        with pytest.raises(AssertionError) as caught:
+            running.run_until(lambda: False, within=0.3, show=["tes1:0x000"])
+        assert "not true within 0.3 s" in str(caught.value)
+        assert "tes1:0x000 = " in str(caught.value)

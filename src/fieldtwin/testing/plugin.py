@@ -127,14 +127,18 @@ def _speed(value: object) -> float | None:
         return None
     if isinstance(value, int | float) and not isinstance(value, bool) and value > 0:
         return float(value)
-    pytest.fail(f"@pytest.mark.plant: speed={value!r} (allowed a number > 0 or 'max')")
+    pytest.fail(
+        f"@pytest.mark.plant: speed={value!r} (allowed a number > 0 or 'max')", pytrace=False
+    )
 
 
 @pytest.fixture
 def plc(plant: Plant) -> Plc:
     """The PLC of the test's plant."""
     if plant.plc is None:
-        pytest.fail(f"plc fixture: {plant.name} has no PLC (no [plc] and no [[module]])")
+        pytest.fail(
+            f"plc fixture: {plant.name} has no PLC (no [plc] and no [[module]])", pytrace=False
+        )
     return plant.plc
 
 
