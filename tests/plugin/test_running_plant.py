@@ -195,7 +195,9 @@ def test_a_killed_test_process_takes_the_run_with_it(project: pytest.Pytester) -
         "tests/test_killed.py",
         """
 import json, os, signal
+import pytest
 
+@pytest.mark.plant("plants/station.toml")
 def test_killed(running_plant):
     with open(os.environ["RECORD"], "w") as f:
         json.dump({"pid": running_plant.pid}, f)
@@ -206,6 +208,13 @@ def test_killed(running_plant):
     assert result.ret == -signal.SIGKILL
     seen = record(project)
     assert isinstance(seen["pid"], int) and gone(seen["pid"])
+    stale = [p.name for p in (project.path / "plants").iterdir() if p.name != "station.toml"]
+    assert len(stale) == 1 and stale[0].startswith(".station.fieldtwin-")
+    # the next run of that plant file removes the copy the killed process left
+    (project.path / "tests" / "test_killed.py").unlink()
+    write(project, "tests/test_station.py", STATION_TEST)
+    project.runpytest_subprocess("-p", "no:cacheprovider").assert_outcomes(passed=1)
+    assert sorted(p.name for p in (project.path / "plants").iterdir()) == ["station.toml"]
 
 
 def test_a_plant_the_run_refuses_is_a_setup_error_with_its_output(

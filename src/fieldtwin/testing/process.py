@@ -148,6 +148,28 @@ runpy.run_module("fieldtwin", run_name="__main__", alter_sys=True)
 """
 
 
+_COPY = re.compile(r"^\.(?P<stem>.+)\.fieldtwin-(?P<pid>\d+)-[0-9a-f]{8}\.toml$")
+
+
+def _remove_stale_copies(home: Path, stem: str) -> None:
+    """The copies a killed test process left beside the plant file (its pid is gone)."""
+    try:
+        names = [p for p in home.iterdir() if p.name.startswith(f".{stem}.fieldtwin-")]
+    except OSError:
+        return
+    for path in names:
+        match = _COPY.match(path.name)
+        if match is None or match.group("stem") != stem:
+            continue
+        try:
+            os.kill(int(match.group("pid")), 0)
+        except ProcessLookupError:
+            with contextlib.suppress(OSError):
+                path.unlink()
+        except (PermissionError, OverflowError):
+            continue
+
+
 class RunningPlant:
     """A ``fieldtwin run`` subprocess and the ways in: ``client``, ``url``, ``endpoints``."""
 
@@ -185,7 +207,8 @@ class RunningPlant:
 
             home = Path(tempfile.mkdtemp(prefix="fieldtwin-plant-"))
         stem = self.declared.stem if self.declared is not None else "default"
-        copy = home / f".{stem}.fieldtwin-{uuid.uuid4().hex[:8]}.toml"
+        _remove_stale_copies(home, stem)
+        copy = home / f".{stem}.fieldtwin-{os.getpid()}-{uuid.uuid4().hex[:8]}.toml"
         try:
             copy.write_text(text, "utf-8")
         except OSError as exc:
