@@ -14,3 +14,6 @@ settings.register_profile(
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
 )
 settings.load_profile("fieldtwin")
+
+# pytester: tests/plugin runs fieldtwin's pytest plugin in fresh projects.
+pytest_plugins = ["pytester"]
