@@ -81,7 +81,17 @@ def test_fieldtwin_run_warns_about_a_wildcard_listener(tmp_path: Path) -> None:
     plant = tmp_path / "open.toml"
     plant.write_text(PLANT)
     done = subprocess.run(
-        [sys.executable, "-m", "fieldtwin", "run", str(plant), "--duration", "0.2"],
+        [
+            sys.executable,
+            "-m",
+            "fieldtwin",
+            "run",
+            str(plant),
+            "--duration",
+            "0.2",
+            "--control-port",
+            "0",
+        ],
         capture_output=True,
         text=True,
         timeout=60,
