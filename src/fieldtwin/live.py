@@ -201,10 +201,8 @@ def plain_status(plant: Plant) -> list[str]:
         status = device.status()
         rack, slot = _rack_slot(device)
         words = " ".join(f"H'{w:04X}'" for w in plc.image(rack, slot).iw)
-        outputs = output_bits(plc, rack, slot)
         lines.append(
             f"slot {status.address} {status.kind}: {mode(status)} {status.leds_text()} IW {words}"
-            f" O H'{outputs:04X}'"
         )
     if plc is not None and plc.program is not None:
         lines.append(program_line(plc))

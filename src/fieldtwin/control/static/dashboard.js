@@ -106,6 +106,7 @@ function parseParams(text) {
 // --- the fronts ------------------------------------------------------------------------
 
 const panels = new Map(); // id -> { root, display, html }
+const refits = new Map(); // "kind:id:input" -> fits a slider to the input's range now
 const lastSerial = new Map(); // "slot channel dir" -> last text block seen
 
 function moduleHtml(m) {
@@ -195,15 +196,26 @@ function controlsFor(kind, dev, ident) {
       const field = el("input", { class: "value", size: "7", placeholder: analog(name) ? (kind === "tes" ? "5.0" : "12mA") : "CTS=1" });
       row.append(field, el("button", { type: "button", class: "set", onclick: () => setInput(base, name, field.value, msg) }, "set"));
       if (analog(name)) {
-        const unit = kind === "tes" ? "V" : aemUnit(dev, name);
-        const [lo, hi] = unit === "mA" ? [0, 20] : kind === "tes" ? [0, 10] : [-10, 10];
-        const slider = el("input", { type: "range", class: "slider", min: lo, max: hi, step: "0.1", value: lo });
+        const slider = el("input", { type: "range", class: "slider", step: "0.1" });
+        const unitLabel = el("span", { class: "unit" });
+        const fit = (d) => { // the channel's range as configured now (an AEM's changes at its configuration)
+          const unit = kind === "tes" ? "V" : aemUnit(d, name);
+          const [lo, hi] = unit === "mA" ? [0, 20] : kind === "tes" ? [0, 10] : [-10, 10];
+          if (slider.dataset.unit !== unit) {
+            slider.dataset.unit = unit;
+            slider.min = lo; slider.max = hi; slider.value = lo;
+            unitLabel.textContent = unit;
+            field.placeholder = kind === "tes" ? "5.0" : unit === "mA" ? "12mA" : "2.5V";
+          }
+        };
+        fit(dev);
+        refits.set(`${kind}:${ident}:${name}`, fit);
         slider.addEventListener("change", () => {
-          const text = kind === "tes" ? slider.value : `${slider.value}${unit}`;
+          const text = kind === "tes" ? slider.value : `${slider.value}${slider.dataset.unit}`;
           field.value = text;
           setInput(base, name, text, msg);
         });
-        row.append(slider);
+        row.append(slider, unitLabel);
       }
     }
     if (!dev.kind.startsWith("TSX SCM")) {
@@ -326,6 +338,7 @@ function draw(state) {
     const panel = ensurePanel(modules, "module", m);
     const html = moduleHtml(m);
     if (html !== panel.html) { panel.display.innerHTML = html; panel.html = html; }
+    for (const name of m.inputs) refits.get(`module:${m.id}:${name}`)?.(m);
   }
   const tesList = document.getElementById("tes-list");
   for (const t of state.tes) {
