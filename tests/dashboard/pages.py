@@ -35,3 +35,9 @@ def open_controls(page: Any, panel: str) -> Any:
     if box.get_attribute("open") is None:
         box.locator("summary").click()
     return box
+
+
+def element_shot(page: Any, selector: str, path: str) -> None:
+    """A screenshot of one part of the page, the sticky header kept out of it."""
+    page.add_style_tag(content="header { position: static !important; }")
+    page.locator(selector).screenshot(path=path)

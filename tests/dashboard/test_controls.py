@@ -11,7 +11,7 @@ from pymodbus.client import ModbusTcpClient
 
 from tests.control.plantproc import Running
 from tests.dashboard.browser import artifact
-from tests.dashboard.pages import open_controls, open_dashboard, wait_sim
+from tests.dashboard.pages import element_shot, open_controls, open_dashboard, wait_sim
 
 
 def api(plant: Running, path: str) -> Any:
@@ -90,7 +90,7 @@ def test_the_text_block_panel_runs_an_exchange(page: Any, plant: Running) -> Non
     assert result.locator("[data-f=E]").inner_text() == "0"
     assert result.locator("[data-f=V]").inner_text() != "-"
     assert result.locator("[data-f=words]").inner_text() != "-"
-    page.locator("#textblock").screenshot(path=str(artifact("dashboard-textblock.png")))
+    element_shot(page, "#textblock", str(artifact("dashboard-textblock.png")))
 
 
 def test_the_traffic_view_filters_by_endpoint_slave_and_function(page: Any, plant: Running) -> None:
@@ -123,4 +123,4 @@ def test_the_traffic_view_filters_by_endpoint_slave_and_function(page: Any, plan
     page.wait_for_function("document.querySelectorAll('#traffic-table tbody tr').length === 0")
     page.fill("#f-endpoint", "tcp://127.0.0.1")
     page.wait_for_function("document.querySelectorAll('#traffic-table tbody tr').length >= 6")
-    page.locator("#traffic").screenshot(path=str(artifact("dashboard-traffic.png")))
+    element_shot(page, "#traffic", str(artifact("dashboard-traffic.png")))

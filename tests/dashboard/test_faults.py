@@ -12,7 +12,7 @@ from typing import Any
 
 from tests.control.plantproc import Running
 from tests.dashboard.browser import artifact
-from tests.dashboard.pages import open_controls, open_dashboard, wait_sim
+from tests.dashboard.pages import element_shot, open_controls, open_dashboard, wait_sim
 
 
 def api(plant: Running, path: str) -> Any:
@@ -36,7 +36,7 @@ def test_a_fault_button_lights_f_and_sets_i_s(page: Any, plant: Running) -> None
     )
     assert api(plant, "/devices/5/leds")["F"] == "on"
     assert api(plant, "/devices/5/objects/I5,S")["value"] == 1
-    page.locator("#mod-5").screenshot(path=str(artifact("dashboard-aem-fault.png")))
+    element_shot(page, "#mod-5", str(artifact("dashboard-aem-fault.png")))
     # the power break and return, from the header: the module restarts its self-test
     page.fill("#break-s", "0.5")
     page.click("#power-break")
