@@ -326,6 +326,7 @@ function draw(state) {
   const clock = state.clock;
   document.getElementById("clock").textContent = `t = ${clock.t_s.toFixed(1)} s${clock.paused ? " (paused)" : ""}`;
   document.getElementById("speed").textContent = `speed ${clock.speed === "max" ? "max" : "x" + clock.speed}`;
+  if (!stats.updates) document.getElementById("speed-value").value = String(clock.speed); // the plant's, at first
   if (state.plc) {
     document.getElementById("plc-model").textContent = state.plc.model;
     const mode = document.getElementById("plc-mode");
