@@ -17,7 +17,6 @@ from typing import Any
 from fastapi import FastAPI, Request
 from fastapi.responses import HTMLResponse
 from fastapi.staticfiles import StaticFiles
-from fastapi.templating import Jinja2Templates
 
 from fieldtwin import __version__
 from fieldtwin.control.panels import panels
@@ -38,13 +37,21 @@ def _rate(text: str | None) -> int:
 
 
 def add_dashboard(app: FastAPI, control: Control, run: Callable[..., Any]) -> None:
-    templates = Jinja2Templates(directory=str(TEMPLATES))
+    templates: list[Any] = []  # Jinja2 loaded at the first page (not at `fieldtwin run`'s start)
+
+    def template() -> Any:
+        if not templates:
+            from fastapi.templating import Jinja2Templates
+
+            templates.append(Jinja2Templates(directory=str(TEMPLATES)))
+        return templates[0]
+
     app.mount("/static", StaticFiles(directory=str(STATIC)), name="static")
 
     @app.get("/", include_in_schema=False, response_class=HTMLResponse)
     async def page(request: Request) -> Any:
         token = request.query_params.get("token", "")
-        return templates.TemplateResponse(
+        return template().TemplateResponse(
             request,
             "dashboard.html",
             {
