@@ -1,10 +1,11 @@
 """The live status view of `fieldtwin run` (rich), and its plain-text twin.
 
 Both see the plant through the Device face only (fieldtwin.devices.face).  The
-view fits the terminal: at 130 columns and more one line per module with a
-column per LED and the input bits; from 96 columns the LEDs share a column and
-the input bits are one hex word; below, each module's eight input words take
-two lines of their own column (80 x 24 shows the default plant whole).
+view fits the terminal: at 150 columns and more one line per module with a
+column per LED and the input and output bits (Ixy,F..0, Oxy,F..0) in binary;
+from 104 columns the LEDs share a column and the I and O bits are hex words;
+below, each module's eight input words take two lines of their own column and
+the O word sits under the I word (80 x 24 shows the default plant whole).
 """
 
 from __future__ import annotations
@@ -16,11 +17,12 @@ from rich.text import Text
 
 from fieldtwin.clock import S
 from fieldtwin.devices.face import Device, DeviceStatus, TesAddress
+from fieldtwin.errors import FieldtwinError
 from fieldtwin.plant import Plant
 from fieldtwin.tsx.plc import Plc
 
-WIDE = 130  # a column per LED, the input bits in binary
-MEDIUM = 96  # one LED column, input bits in hex; below: input words on two lines
+WIDE = 150  # a column per LED, the input and output bits in binary
+MEDIUM = 104  # one LED column, I and O bits in hex; below: words and I / O on two lines
 _LIT = {"on": ("●", "green"), "blink": ("◐", "yellow"), "off": ("○", "dim")}
 _ALARM = {"ERR", "F"}  # LEDs that are red when lit
 
@@ -75,7 +77,13 @@ def _modules(plant: Plant, modules: list[Device], title: str, width: int) -> Tab
     wide, medium = width >= WIDE, MEDIUM <= width < WIDE
     leds = ["OK", "ERR", "F"] if wide else ["LEDs"]
     words = "IW0..IW7" if width >= MEDIUM else "IW0..3 / IW4..7"
-    for col in ("slot", "module", "mode", *leds, "I,S", words, "I F..0" if wide else "I"):
+    if wide:
+        bit_columns: tuple[str, ...] = ("I F..0", "O F..0")
+    elif medium:
+        bit_columns = ("I", "O")
+    else:
+        bit_columns = ("I / O",)  # the output bits on the words' second line
+    for col in ("slot", "module", "mode", *leds, "I,S", words, *bit_columns):
         table.add_column(col, no_wrap=True)
     assert plant.plc is not None
     for device in modules:
@@ -84,12 +92,34 @@ def _modules(plant: Plant, modules: list[Device], title: str, width: int) -> Tab
         image = plant.plc.image(rack, slot)
         iw = [f"{w:04X}" for w in image.iw]
         shown = " ".join(iw) if wide or medium else " ".join(iw[:4]) + "\n" + " ".join(iw[4:])
-        lights = [_led(name, state) for name, state in status.leds] if wide else [_leds(status)]
-        bits = f"{image.i_bits:016b}" if wide else f"{image.i_bits:04X}"
+        if wide:  # a module without one of the LEDs (SCM 1.2: no ERR) leaves its cell empty
+            lit = status.led_map
+            lights = [_led(name, lit[name]) if name in lit else Text("") for name in leds]
+        else:
+            lights = [_leds(status)]
+        o_bits = output_bits(plant.plc, rack, slot)
+        if wide:
+            bits = [f"{image.i_bits:016b}", f"{o_bits:016b}"]
+        elif medium:
+            bits = [f"{image.i_bits:04X}", f"{o_bits:04X}"]
+        else:
+            bits = [f"{image.i_bits:04X}\n{o_bits:04X}"]
         table.add_row(
-            status.address, status.kind, mode(status), *lights, str(int(image.fault)), shown, bits
+            status.address, status.kind, mode(status), *lights, str(int(image.fault)), shown, *bits
         )
     return table
+
+
+def output_bits(plc: Plc, rack: int, slot: int) -> int:
+    """Oxy,0..Oxy,F as the program wrote them (a DST's lamps; 0 for a module out)."""
+    name = f"{rack}{slot}" if rack else f"{slot}"
+    value = 0
+    try:
+        for bit in range(16):
+            value |= (plc.read(f"O{name},{bit:X}") & 1) << bit
+    except FieldtwinError:
+        return 0
+    return value
 
 
 def _tes_table(devices: list[Device], width: int) -> Table:

@@ -19,6 +19,7 @@ from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from fieldtwin import __version__
+from fieldtwin.control.dashboard import add_dashboard
 from fieldtwin.control.guards import BodyLimit, TokenGate
 from fieldtwin.control.resources import Control, NotFound
 from fieldtwin.control.schemas import (
@@ -117,6 +118,7 @@ def create_app(control: Control, sim: Sim, *, token: str | None = None) -> Any:
     _plc_routes(app, control, run)
     _clock_routes(app, control, run)
     add_stream(app, control, sim)
+    add_dashboard(app, control, run)
     return BodyLimit(TokenGate(app, token))
 
 

@@ -73,6 +73,8 @@ def launch(
         launched.close()
         raise
     launched.lines.append(f"control: {url}")
+    page = f"{url}/" if token is None else f"{url}/?token={token}"
+    launched.lines.append(f"dashboard: {page}")  # docs/dashboard.md
     attach = f"fieldtwin console --attach {url}"
     if token is not None:
         launched.lines.append(f"control token: {token}")

@@ -1,0 +1,70 @@
+"""The dashboard (docs/dashboard.md): the page at ``/``, its files, and its one look.
+
+``GET /`` is the page, rendered from the Jinja2 template ``templates/dashboard.html``;
+``/static/...`` its scripts, styles and the vendored uPlot (every file ships in
+the package: no CDN).  ``GET /dashboard/state`` gives, in one answer, what the
+page draws (fieldtwin.control.panels), as one command through the inbox like
+every other request: the page never touches the simulation, and everything it
+changes goes through the control API's own resources.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from fastapi import FastAPI, Request
+from fastapi.responses import HTMLResponse
+from fastapi.staticfiles import StaticFiles
+
+from fieldtwin import __version__
+from fieldtwin.control.panels import panels
+from fieldtwin.control.resources import Control
+
+HERE = Path(__file__).resolve().parent
+STATIC = HERE / "static"
+TEMPLATES = HERE / "templates"
+MIN_RATE, MAX_RATE, DEFAULT_RATE = 1, 20, 5  # updates per second the page asks for
+
+
+def _rate(text: str | None) -> int:
+    try:
+        value = int(text or DEFAULT_RATE)
+    except ValueError:
+        return DEFAULT_RATE
+    return max(MIN_RATE, min(MAX_RATE, value))
+
+
+def add_dashboard(app: FastAPI, control: Control, run: Callable[..., Any]) -> None:
+    templates: list[Any] = []  # Jinja2 loaded at the first page (not at `fieldtwin run`'s start)
+
+    def template() -> Any:
+        if not templates:
+            from fastapi.templating import Jinja2Templates
+
+            templates.append(Jinja2Templates(directory=str(TEMPLATES)))
+        return templates[0]
+
+    app.mount("/static", StaticFiles(directory=str(STATIC)), name="static")
+
+    @app.get("/", include_in_schema=False, response_class=HTMLResponse)
+    async def page(request: Request) -> Any:
+        token = request.query_params.get("token", "")
+        return template().TemplateResponse(
+            request,
+            "dashboard.html",
+            {
+                "version": __version__,
+                "token": token,
+                "suffix": f"?v={__version__}" + (f"&token={token}" if token else ""),
+                "rate": _rate(request.query_params.get("rate")),
+            },
+        )
+
+    @app.get("/dashboard/state", summary="the whole plant as the dashboard draws it")
+    async def state() -> Any:
+        return await run(lambda: panels(control))
+
+
+__all__ = ["DEFAULT_RATE", "MAX_RATE", "add_dashboard"]

@@ -1,0 +1,642 @@
+// The fieldtwin dashboard (docs/dashboard.md): a client of the control API, nothing more.
+// It polls GET /dashboard/state, draws the fronts, sends every command to the API's own
+// resources, and listens to GET /events for the traffic.  Every buffer is a bounded ring.
+
+const BODY = document.body;
+const PARAMS = new URLSearchParams(location.search);
+const TOKEN = PARAMS.get("token") || BODY.dataset.token || "";
+const RATE = Math.max(1, Math.min(20, Number(PARAMS.get("rate") || BODY.dataset.rate) || 5));
+const TREND_POINTS = 3000; // points kept per series (a ring)
+const TRAFFIC_KEPT = 1000; // events kept for the traffic view (a ring)
+const TRAFFIC_SHOWN = 200; // rows drawn
+const LED_COLOURS = { OK: "green", ERR: "red", F: "red", Pwr: "green", Run: "green", Prm: "green", Wdg: "red" };
+
+const stats = { updates: 0, events: 0, errors: 0, lastError: "", state: null };
+window.__fieldtwin = stats;
+
+// --- the API -------------------------------------------------------------------------
+
+async function api(method, path, body) {
+  const headers = { "content-type": "application/json" };
+  if (TOKEN) headers.authorization = `Bearer ${TOKEN}`;
+  const answer = await fetch(path, {
+    method, headers, body: body === undefined ? undefined : JSON.stringify(body),
+  });
+  let data = null;
+  try { data = await answer.json(); } catch (_) { data = null; }
+  if (!answer.ok) {
+    const text = data && data.error ? data.error : `${answer.status} ${answer.statusText}`;
+    throw new Error(text);
+  }
+  return data;
+}
+
+const errorBox = document.getElementById("error");
+function showError(text, where) {
+  stats.errors += 1;
+  stats.lastError = text;
+  errorBox.textContent = text;
+  errorBox.hidden = false;
+  if (where) { where.textContent = text; where.className = "msg bad"; }
+}
+function showOk(text, where) {
+  errorBox.hidden = true;
+  if (where) { where.textContent = text; where.className = "msg ok"; }
+}
+async function command(method, path, body, where, okText) {
+  try {
+    const data = await api(method, path, body);
+    showOk(okText || "ok", where);
+    return data;
+  } catch (exc) {
+    showError(`${method} ${path}: ${exc.message}`, where);
+    return null;
+  }
+}
+
+// --- small helpers ---------------------------------------------------------------------
+
+function esc(text) {
+  return String(text ?? "").replace(/[&<>"']/g, (c) => ({ "&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;", "'": "&#39;" })[c]);
+}
+function el(tag, attrs, ...children) {
+  const node = document.createElement(tag);
+  for (const [key, value] of Object.entries(attrs || {})) {
+    if (key === "class") node.className = value;
+    else if (key.startsWith("on")) node.addEventListener(key.slice(2), value);
+    else node.setAttribute(key, value);
+  }
+  for (const child of children) node.append(child);
+  return node;
+}
+function led(name, state) {
+  const colour = LED_COLOURS[name] || "amber";
+  return `<span class="ledbox"><span class="led ${colour} led-${esc(state)}" data-led="${esc(name)}" title="${esc(name)} ${esc(state)}"></span>${esc(name)}</span>`;
+}
+function bitRow(label, value, count, what) {
+  if (value === null || value === undefined) return "";
+  let cells = "";
+  for (let i = count - 1; i >= 0; i -= 1) {
+    const on = (value >> i) & 1;
+    cells += `<span class="bit ${on ? "on" : ""}" data-${what}="${i.toString(16).toUpperCase()}" title="${label},${i.toString(16).toUpperCase()} = ${on}">${i.toString(16).toUpperCase()}</span>`;
+  }
+  return `<div class="bits"><span class="lbl">${label}</span>${cells}</div>`;
+}
+function signed(v) { return v === null || v === undefined ? "-" : v & 0x8000 ? v - 0x10000 : v; }
+function parseNumber(text) {
+  const t = String(text).trim();
+  const h = /^H'([0-9A-Fa-f]+)'$/.exec(t);
+  if (h) return parseInt(h[1], 16);
+  if (/^0x[0-9a-f]+$/i.test(t)) return parseInt(t, 16);
+  if (/^-?\d+$/.test(t)) return parseInt(t, 10);
+  return NaN;
+}
+function parseParams(text) {
+  // "offset=5 amplitude=4 period_s=60" -> { offset: 5, amplitude: 4, period_s: 60 }
+  const out = {};
+  for (const part of String(text).trim().split(/[\s,]+/).filter(Boolean)) {
+    const [key, value] = part.split("=");
+    if (!key || value === undefined || value === "") throw new Error(`${part}: write name=value`);
+    const number = Number(value);
+    out[key] = value === "true" ? true : value === "false" ? false : Number.isFinite(number) ? number : value;
+  }
+  return out;
+}
+
+// --- the fronts ------------------------------------------------------------------------
+
+const panels = new Map(); // id -> { root, display, html }
+const refits = new Map(); // "kind:id:input" -> fits a slider to the input's range now
+const lastSerial = new Map(); // "slot channel dir" -> last text block seen
+
+function moduleHtml(m) {
+  const head = `<div class="head"><b>slot ${esc(m.address)}</b> <span class="kind">${esc(m.kind)}</span>
+    <span class="state" data-f="state">${esc(m.present ? m.state : "removed")}${m.mode ? " · " + esc(m.mode) : ""}</span></div>`;
+  const leds = `<div class="leds">${m.leds.map(([n, s]) => led(n, s)).join("")}
+    <span class="is">I,S <b data-f="is">${m.is}</b></span></div>`;
+  const bits = bitRow(`I${m.address}`, m.i_bits, m.points, "i") + bitRow(`O${m.address}`, m.o_bits, m.points, "o");
+  let words = "";
+  if (!m.kind.startsWith("TSX DET") && !m.kind.startsWith("TSX DST")) {
+    words = `<table class="words"><tr><th>IW</th><th>hex</th><th>dec</th><th>OW</th><th>hex</th></tr>`;
+    for (let i = 0; i < 8; i += 1) {
+      const iw = m.iw[i], ow = m.ow[i];
+      words += `<tr><td>${esc(iw.name)}</td><td data-w="${esc(iw.name)}">${esc(iw.hex)}</td><td>${signed(iw.value)}</td>
+        <td>${esc(ow.name)}</td><td data-w="${esc(ow.name)}">${esc(ow.hex)}</td></tr>`;
+    }
+    words += "</table>";
+  }
+  return head + leds + bits + words + decodedHtml(m);
+}
+
+function decodedHtml(m) {
+  const d = m.decoded || {};
+  if (m.kind.startsWith("TSX AEM")) {
+    let rows = "";
+    for (const ch of d.channels || []) {
+      rows += `<tr><td>${ch.channel}</td><td class="meas" data-meas="${ch.channel}">${ch.value ?? "-"}</td><td>${esc(ch.text)}</td></tr>`;
+    }
+    return `<div class="decoded"><div class="muted">${esc(d.configuration)} · ${esc(d.sampling)}</div>
+      <table class="meas"><tr><th>ch</th><th>measurement</th><th>range, scaling, thresholds</th></tr>${rows}</table></div>`;
+  }
+  if (m.kind.startsWith("TSX DEM")) {
+    const msgs = (d.messages || []).map((x) => `<tr><td>${esc(x.stamp)}</td><td>${esc(x.what)}${x.h ? " (H)" : ""}</td></tr>`).join("");
+    return `<div class="decoded"><div>module time <b data-f="time">${esc(d.time)}</b></div>
+      <div>stack <b data-f="stack">${d.fill}/${d.size}</b> ${d.overflow ? `<span class="alarm">overflow, ${d.lost} lost</span>` : "no overflow"}
+      · logging ${esc(d.logging)} · sync fault ${esc(d.sync_fault)}</div>
+      <table class="msgs"><tr><th>time stamp</th><th>message</th></tr>${msgs || '<tr><td colspan="2" class="muted">no message stacked</td></tr>'}</table></div>`;
+  }
+  if (m.kind.startsWith("TSX SCM")) {
+    const rows = (d.channels || []).map((c) => {
+      const rx = lastSerial.get(`${m.address} ${c.channel} in`) || "";
+      const tx = lastSerial.get(`${m.address} ${c.channel} out`) || "";
+      return `<tr><td>${c.channel}</td><td>${esc(c.text)}</td></tr>
+        <tr><td></td><td>received <code data-rx="${c.channel}">${esc(rx)}</code> · sent <code data-tx="${c.channel}">${esc(tx)}</code></td></tr>`;
+    }).join("");
+    return `<div class="decoded"><div>${esc(d.activity)}</div><table class="msgs">${rows}</table></div>`;
+  }
+  return "";
+}
+
+function tesHtml(t) {
+  const head = `<div class="head"><b>TES ${t.slave}</b> <span class="kind">${esc(t.kind)}</span>
+    <span class="state" data-f="state">${esc(t.state)} ${esc(t.status)}</span></div>
+    <div class="muted">${esc(t.endpoint)}</div>`;
+  const leds = `<div class="leds">${t.leds.map(([n, s]) => led(n, s)).join("")}</div>`;
+  const pack = (list) => list.reduce((acc, on, i) => acc | ((on ? 1 : 0) << i), 0) >>> 0;
+  let io = "";
+  if (t.inputs.length) io += bitRow("in", pack(t.inputs), t.inputs.length, "in");
+  if (t.outputs.length) io += bitRow("out", pack(t.outputs), t.outputs.length, "out");
+  let analog = "";
+  if (t.analog.length) {
+    analog = `<table class="meas"><tr><th>input</th><th>${esc(t.analog[0].unit)}</th><th>points</th></tr>` +
+      t.analog.map((a) => `<tr><td>${a.input}</td><td data-volts="${a.input}">${a.level.toFixed(3)}</td><td data-points="${a.input}">${a.points}</td></tr>`).join("") + "</table>";
+  }
+  let counters = "";
+  if (t.counters.length) {
+    counters = `<details class="counters"><summary>counters</summary><table class="meas"><tr><th>input</th><th>rises</th><th>falls</th></tr>` +
+      t.counters.map((c) => `<tr><td>${c.input}</td><td>${c.rise}</td><td>${c.fall}</td></tr>`).join("") + "</table></details>";
+  }
+  const wd = t.watchdog ? `<div>watchdog <b>${t.watchdog.seconds} s</b>${t.watchdog.word ? "" : " (off)"} · Wdg ${esc(t.watchdog.led)}</div>` : "";
+  return head + leds + io + analog + wd + counters;
+}
+
+function controlsFor(kind, dev, ident) {
+  // built once per device: inputs, signal presets, faults, and the device's own actions
+  const box = el("details", { class: "ctl" }, el("summary", {}, "controls"));
+  const msg = el("span", { class: "msg" });
+  const base = `/devices/${encodeURIComponent(ident)}`;
+  const inputs = kind === "tes" ? dev.analog.map((a) => a.input).concat(dev.inputs.map((_, i) => String(i))) : dev.inputs;
+  const analog = (name) => kind === "tes" ? name.startsWith("a") : dev.kind.startsWith("TSX AEM");
+  const discrete = (name) => !analog(name) && !dev.kind.startsWith("TSX SCM");
+  for (const name of inputs) {
+    const row = el("div", { class: "input-row", "data-input": name }, el("span", { class: "lbl" }, `in ${name}`));
+    if (discrete(name)) {
+      row.append(el("button", { type: "button", class: "toggle", onclick: () => toggle(kind, ident, name, msg) }, "toggle"));
+    } else {
+      const field = el("input", { class: "value", size: "7", placeholder: analog(name) ? (kind === "tes" ? "5.0" : "12mA") : "CTS=1" });
+      row.append(field, el("button", { type: "button", class: "set", onclick: () => setInput(base, name, field.value, msg) }, "set"));
+      if (analog(name)) {
+        const slider = el("input", { type: "range", class: "slider", step: "0.1" });
+        const unitLabel = el("span", { class: "unit" });
+        const fit = (d) => { // the channel's range as configured now (an AEM's changes at its configuration)
+          const unit = kind === "tes" ? "V" : aemUnit(d, name);
+          const [lo, hi] = unit === "mA" ? [0, 20] : kind === "tes" ? [0, 10] : [-10, 10];
+          if (slider.dataset.unit !== unit) {
+            slider.dataset.unit = unit;
+            slider.min = lo; slider.max = hi; slider.value = lo;
+            unitLabel.textContent = unit;
+            field.placeholder = kind === "tes" ? "5.0" : unit === "mA" ? "12mA" : "2.5V";
+          }
+        };
+        fit(dev);
+        refits.set(`${kind}:${ident}:${name}`, fit);
+        slider.addEventListener("change", () => {
+          const text = kind === "tes" ? slider.value : `${slider.value}${slider.dataset.unit}`;
+          field.value = text;
+          setInput(base, name, text, msg);
+        });
+        row.append(slider, unitLabel);
+      }
+    }
+    if (!dev.kind.startsWith("TSX SCM")) {
+      const preset = el("select", { class: "preset" });
+      const presets = analog(name) ? ANALOG_PRESETS : DISCRETE_PRESETS;
+      for (const key of Object.keys(presets)) preset.append(el("option", { value: key }, key));
+      const args = el("input", { class: "args", size: "22", value: presets[preset.value] });
+      preset.addEventListener("change", () => { args.value = presets[preset.value]; });
+      row.append(preset, args, el("button", { type: "button", class: "drive", onclick: () => drive(base, name, preset.value, args.value, analog(name), msg) }, "drive"));
+    }
+    box.append(row);
+  }
+  const faults = el("div", { class: "faults" }, el("span", { class: "lbl" }, "faults"));
+  for (const fault of dev.faults) {
+    const params = el("input", { class: "args", size: "8", placeholder: "ms=200" });
+    const needs = /late_answer|bad_crc|broken_character|not_ready/.test(fault.name);
+    const button = el("button", { type: "button", class: "fault", "data-fault": fault.name, title: fault.description }, fault.name);
+    button.addEventListener("click", async () => {
+      const active = !button.classList.contains("active");
+      let body;
+      try { body = { active, params: needs && active ? numbers(parseParams(params.value)) : {} }; } catch (exc) { showError(`${fault.name}: ${exc.message}`, msg); return; }
+      const done = await command("PUT", `${base}/faults/${encodeURIComponent(fault.name)}`, body, msg, `${fault.name} ${active ? "set" : "cleared"}`);
+      if (done) button.classList.toggle("active", active);
+    });
+    faults.append(button);
+    if (needs) faults.append(params);
+  }
+  box.append(faults);
+  const actions = el("div", { class: "actions" });
+  if (kind === "tes") {
+    actions.append(el("button", { type: "button", onclick: () => command("POST", `${base}/power-cycle`, undefined, msg, "power cycled") }, "power cycle"));
+  } else {
+    actions.append(
+      el("button", { type: "button", class: "remove", onclick: () => command("POST", "/plc/remove", { module: dev.address }, msg, "removed") }, "remove module"),
+      el("button", { type: "button", class: "insert", onclick: () => command("POST", "/plc/insert", { module: dev.address }, msg, "inserted") }, "insert module"),
+    );
+  }
+  box.append(actions, msg);
+  return box;
+}
+
+const ANALOG_PRESETS = {
+  constant: "value=5",
+  ramp: "start=0 end=10 t0_s=0 duration_s=60",
+  sine: "offset=5 amplitude=4 period_s=30",
+  "pulse train": "low=0 high=10 period_s=10 duty=0.5",
+};
+const DISCRETE_PRESETS = {
+  constant: "value=true",
+  "pulse train": "period_s=2 duty=0.5",
+};
+function numbers(params) {
+  for (const [key, value] of Object.entries(params)) {
+    if (typeof value !== "number") throw new Error(`${key}=${value}: a number`);
+  }
+  return params;
+}
+function aemUnit(dev, name) {
+  const channel = (dev.decoded.channels || [])[Number(name)];
+  return channel && /mA/.test(channel.text) ? "mA" : "V";
+}
+async function setInput(base, name, text, msg) {
+  const value = String(text).trim();
+  if (!value) { showError(`input ${name}: type a value`, msg); return; }
+  const number = Number(value);
+  const body = { value: value !== "" && Number.isFinite(number) ? number : value };
+  await command("PUT", `${base}/inputs/${encodeURIComponent(name)}`, body, msg, `input ${name} = ${value}`);
+}
+async function toggle(kind, ident, name, msg) {
+  const state = stats.state;
+  let now = false;
+  if (kind === "tes") {
+    const t = state.tes.find((x) => x.id === ident);
+    now = Boolean(t && t.inputs[Number(name)]);
+  } else {
+    const m = state.modules.find((x) => x.id === ident);
+    if (m && m.i_bits !== null) now = Boolean((m.i_bits >> parseInt(name, 16)) & 1);
+    if (m && m.kind.startsWith("TSX DEM")) now = Boolean((parseInt((m.details.inputs || "H'0'").slice(2), 16) >> Number(name)) & 1);
+  }
+  await command("PUT", `/devices/${encodeURIComponent(ident)}/inputs/${encodeURIComponent(name)}`, { value: !now }, msg, `input ${name} -> ${!now ? 1 : 0}`);
+}
+async function drive(base, name, preset, text, analog, msg) {
+  let params;
+  try { params = parseParams(text); } catch (exc) { showError(`input ${name}: ${exc.message}`, msg); return; }
+  let signal;
+  if (preset === "constant") signal = { kind: "constant", ...params };
+  else if (preset === "pulse train") signal = { kind: analog ? "square" : "pulse", ...params };
+  else signal = { kind: preset, ...params };
+  await command("PUT", `${base}/inputs/${encodeURIComponent(name)}`, { signal }, msg, `input ${name}: ${preset}`);
+}
+
+function ensurePanel(container, kind, dev) {
+  let panel = panels.get(`${kind}:${dev.id}`);
+  if (!panel) {
+    const display = el("div", { class: "display" });
+    const root = el("article", { class: `panel ${kind}`, id: `${kind === "tes" ? "tes" : "mod"}-${dev.id}` }, display);
+    root.append(controlsFor(kind, dev, dev.id));
+    container.append(root);
+    panel = { root, display, html: "" };
+    panels.set(`${kind}:${dev.id}`, panel);
+  }
+  return panel;
+}
+
+function draw(state) {
+  stats.state = state;
+  document.getElementById("title").textContent = state.title;
+  const clock = state.clock;
+  document.getElementById("clock").textContent = `t = ${clock.t_s.toFixed(1)} s${clock.paused ? " (paused)" : ""}`;
+  document.getElementById("speed").textContent = `speed ${clock.speed === "max" ? "max" : "x" + clock.speed}`;
+  if (!stats.updates) document.getElementById("speed-value").value = String(clock.speed); // the plant's, at first
+  if (state.plc) {
+    document.getElementById("plc-model").textContent = state.plc.model;
+    const mode = document.getElementById("plc-mode");
+    mode.textContent = state.plc.mode;
+    mode.classList.toggle("stop", !state.plc.running);
+    document.getElementById("plc-scan").textContent = `master task ${state.plc.scan_ms} ms`;
+  }
+  const modules = document.getElementById("modules");
+  for (const m of state.modules) {
+    const panel = ensurePanel(modules, "module", m);
+    const html = moduleHtml(m);
+    if (html !== panel.html) { panel.display.innerHTML = html; panel.html = html; }
+    for (const name of m.inputs) refits.get(`module:${m.id}:${name}`)?.(m);
+  }
+  const tesList = document.getElementById("tes-list");
+  for (const t of state.tes) {
+    const panel = ensurePanel(tesList, "tes", t);
+    const html = tesHtml(t);
+    if (html !== panel.html) { panel.display.innerHTML = html; panel.html = html; }
+  }
+  trends.sample(state);
+}
+
+// --- the poll loop -------------------------------------------------------------------------
+
+const link = document.getElementById("link");
+const MAX_IN_FLIGHT = 2; // a slow answer does not halve the rate; a third waits its turn
+let inFlight = 0;
+let drawnAt = -1; // t_us of the newest state drawn: an older answer is not drawn over it
+async function poll() {
+  if (inFlight >= MAX_IN_FLIGHT) return;
+  inFlight += 1;
+  try {
+    const state = await api("GET", "/dashboard/state");
+    if (state.clock.t_us >= drawnAt) {
+      drawnAt = state.clock.t_us;
+      draw(state);
+      stats.updates += 1;
+    }
+    link.textContent = `${RATE}/s`;
+    link.className = "muted";
+  } catch (exc) {
+    link.textContent = `no answer: ${exc.message}`;
+    link.className = "alarm";
+  } finally {
+    inFlight -= 1;
+  }
+}
+function startPolling() {
+  poll();
+  setInterval(poll, 1000 / RATE);
+}
+
+// --- the clock and the PLC ---------------------------------------------------------------------
+
+function wireHeader() {
+  const get = (id) => document.getElementById(id);
+  get("pause").addEventListener("click", () => command("POST", "/clock/pause", undefined, null, "paused"));
+  get("resume").addEventListener("click", () => command("POST", "/clock/resume", undefined, null, "resumed"));
+  get("step").addEventListener("click", () => {
+    const ms = Number(get("step-ms").value);
+    if (!Number.isFinite(ms) || get("step-ms").value.trim() === "") { showError(`step: ${get("step-ms").value} is not a number of ms`); return; }
+    command("POST", "/clock/step", { ms }, null, "stepped");
+  });
+  get("set-speed").addEventListener("click", () => {
+    const text = get("speed-value").value.trim();
+    const speed = text === "max" ? "max" : Number(text);
+    if (speed !== "max" && (!Number.isFinite(speed) || text === "")) { showError(`speed: ${text} is not a number or max`); return; }
+    command("PUT", "/clock/speed", { speed }, null, "speed set");
+  });
+  get("power-break").addEventListener("click", () => {
+    const seconds = Number(get("break-s").value);
+    if (!Number.isFinite(seconds) || get("break-s").value.trim() === "") { showError(`power break: ${get("break-s").value} is not seconds`); return; }
+    command("POST", "/plc/power-break", { seconds }, null, "power back");
+  });
+}
+
+// --- the Text Block panel -----------------------------------------------------------------------
+
+function wireTextBlock() {
+  const form = document.getElementById("txt-form");
+  const out = document.getElementById("txt-result");
+  const show = (field, value) => { out.querySelector(`[data-f="${field}"]`).textContent = value; };
+  form.addEventListener("submit", async (event) => {
+    event.preventDefault();
+    const f = form.elements;
+    const body = { txt: parseNumber(f.txt.value), m: parseNumber(f.m.value), c: parseNumber(f.c.value), recv: parseNumber(f.recv.value || "0") };
+    for (const [key, value] of Object.entries(body)) {
+      if (Number.isNaN(value)) { showError(`Text Block: ${key} = ${f[key].value} is not a number (H'0500', 0x500 or 1280)`); return; }
+    }
+    if (f.text.value) body.text = f.text.value;
+    else if (f.send.value.trim()) {
+      body.send = f.send.value.trim().split(/[\s,]+/).map(parseNumber);
+      if (body.send.some(Number.isNaN)) { showError("Text Block: send words are numbers (H'0001' 2 ...)"); return; }
+    }
+    const started = await command("POST", "/exchanges", body, null, "exchange started");
+    if (!started) return;
+    show("state", started.state);
+    for (let i = 0; i < 100; i += 1) { // bounded: 100 polls, 0.2 s apart
+      const ex = await command("GET", `/exchanges/${started.id}`, undefined, null, "exchange");
+      if (!ex) return;
+      show("state", ex.state);
+      if (ex.done) {
+        const r = ex.result || {};
+        show("V", r.V ?? "-"); show("S", r.S ?? "-"); show("E", r.E ?? "-"); show("error", r.error || "-");
+        show("words", (r.words || []).map((w) => w.toString(16).toUpperCase().padStart(4, "0")).join(" ") || "-");
+        show("data", r.data || "-");
+        return;
+      }
+      await new Promise((resolve) => setTimeout(resolve, 200));
+    }
+    show("state", "still running (poll GET /exchanges/" + started.id + ")");
+  });
+}
+
+// --- trends ---------------------------------------------------------------------------------------
+
+class Ring {
+  constructor(size) { this.values = new Float64Array(size); this.size = size; this.start = 0; this.length = 0; }
+  push(value) {
+    const at = (this.start + this.length) % this.size;
+    this.values[at] = value;
+    if (this.length < this.size) this.length += 1; else this.start = (this.start + 1) % this.size;
+  }
+  array() {
+    const out = new Array(this.length);
+    for (let i = 0; i < this.length; i += 1) out[i] = this.values[(this.start + i) % this.size];
+    return out;
+  }
+  clear() { this.start = 0; this.length = 0; }
+}
+
+function catalogue(state) {
+  const found = new Map();
+  for (const m of state.modules) {
+    for (const w of m.iw) found.set(`${m.id}:${w.name}`, { label: `${w.name} (${m.kind})`, get: (s) => signed(s.modules.find((x) => x.id === m.id)?.iw.find((x) => x.name === w.name)?.value) });
+    if (m.i_bits !== null) found.set(`${m.id}:I`, { label: `I${m.address} bits`, get: (s) => s.modules.find((x) => x.id === m.id)?.i_bits });
+    if (m.o_bits !== null) found.set(`${m.id}:O`, { label: `O${m.address} bits`, get: (s) => s.modules.find((x) => x.id === m.id)?.o_bits });
+  }
+  for (const t of state.tes) {
+    for (const a of t.analog) {
+      found.set(`${t.id}:${a.input}:points`, { label: `${t.id} ${a.input} points`, get: (s) => s.tes.find((x) => x.id === t.id)?.analog.find((x) => x.input === a.input)?.points });
+      found.set(`${t.id}:${a.input}:${a.unit}`, { label: `${t.id} ${a.input} ${a.unit}`, get: (s) => s.tes.find((x) => x.id === t.id)?.analog.find((x) => x.input === a.input)?.level });
+    }
+    t.inputs.forEach((_, i) => found.set(`${t.id}:in${i}`, { label: `${t.id} input ${i}`, get: (s) => Number(Boolean(s.tes.find((x) => x.id === t.id)?.inputs[i])) }));
+  }
+  return found;
+}
+
+const trends = {
+  series: [], // { key, label, get, ring }
+  times: new Ring(TREND_POINTS),
+  chart: null,
+  follow: true,
+  known: null,
+  lastDraw: 0,
+  sample(state) {
+    if (!this.known) {
+      this.known = catalogue(state);
+      const pick = document.getElementById("trend-pick");
+      for (const [key, entry] of this.known) pick.append(el("option", { value: key }, entry.label));
+    }
+    if (!this.series.length) return;
+    this.times.push(state.clock.t_s);
+    for (const s of this.series) {
+      const v = s.get(state);
+      s.ring.push(v === undefined || v === null ? NaN : Number(v));
+    }
+    document.getElementById("trend-count").textContent = `${this.times.length} points`;
+    const now = performance.now();
+    if (now - this.lastDraw > 250) { this.lastDraw = now; this.redraw(); }
+  },
+  data() {
+    return [this.times.array(), ...this.series.map((s) => s.ring.array().map((v) => (Number.isNaN(v) ? null : v)))];
+  },
+  add(key) {
+    if (!this.known || !this.known.has(key) || this.series.some((s) => s.key === key)) return;
+    const entry = this.known.get(key);
+    const ring = new Ring(TREND_POINTS);
+    for (let i = 0; i < this.times.length; i += 1) ring.push(NaN);
+    this.series.push({ key, label: entry.label, get: entry.get, ring });
+    this.rebuild();
+  },
+  clear() { this.series = []; this.times.clear(); this.rebuild(); },
+  rebuild() {
+    const box = document.getElementById("trend-chart");
+    if (this.chart) { this.chart.destroy(); this.chart = null; }
+    box.textContent = "";
+    if (!this.series.length || typeof uPlot === "undefined") return;
+    const colours = ["#1b7f3b", "#c0392b", "#2364aa", "#b8860b", "#8e44ad", "#16a085"];
+    const width = Math.max(280, box.clientWidth || 600);
+    this.chart = new uPlot({
+      width, height: 260,
+      scales: { x: { time: false } },
+      axes: [{ label: "simulated time, s" }, {}],
+      series: [{ label: "t s" }, ...this.series.map((s, i) => ({ label: s.label, stroke: colours[i % colours.length], width: 1.5, spanGaps: false }))],
+      cursor: { drag: { x: true, y: false } },
+      hooks: { setSelect: [(u) => { if (u.select.width > 0) this.follow = false; }] },
+    }, this.data(), box);
+  },
+  redraw() {
+    if (!this.chart) return;
+    const x = this.chart.scales.x;
+    const keep = !this.follow && x.min !== undefined && x.min !== null ? [x.min, x.max] : null;
+    this.chart.setData(this.data(), this.follow);
+    if (keep) this.chart.setScale("x", { min: keep[0], max: keep[1] });
+  },
+  view(fn) {
+    if (!this.chart) return;
+    this.follow = false;
+    const { min, max } = this.chart.scales.x;
+    const [a, b] = fn(min, max, max - min);
+    this.chart.setScale("x", { min: a, max: b });
+  },
+  csv() {
+    const data = this.data();
+    const lines = [["t_s", ...this.series.map((s) => `"${s.label.replace(/"/g, "'")}"`)].join(",")];
+    for (let i = 0; i < data[0].length; i += 1) lines.push(data.map((col) => (col[i] === null ? "" : col[i])).join(","));
+    const blob = new Blob([lines.join("\n") + "\n"], { type: "text/csv" });
+    const a = el("a", { href: URL.createObjectURL(blob), download: "fieldtwin-trend.csv" });
+    document.body.append(a);
+    a.click();
+    setTimeout(() => { URL.revokeObjectURL(a.href); a.remove(); }, 1000);
+  },
+};
+
+function wireTrends() {
+  const get = (id) => document.getElementById(id);
+  get("trend-add").addEventListener("click", () => trends.add(get("trend-pick").value));
+  get("trend-clear").addEventListener("click", () => trends.clear());
+  get("trend-left").addEventListener("click", () => trends.view((a, b, w) => [a - w / 4, b - w / 4]));
+  get("trend-right").addEventListener("click", () => trends.view((a, b, w) => [a + w / 4, b + w / 4]));
+  get("trend-in").addEventListener("click", () => trends.view((a, b, w) => [a + w / 4, b - w / 4]));
+  get("trend-out").addEventListener("click", () => trends.view((a, b, w) => [a - w / 2, b + w / 2]));
+  get("trend-live").addEventListener("click", () => { trends.follow = true; trends.redraw(); });
+  get("trend-csv").addEventListener("click", () => trends.csv());
+}
+
+// --- traffic ---------------------------------------------------------------------------------------
+
+const traffic = { events: [], held: false, dirty: false };
+
+function matches(e) {
+  const get = (id) => document.getElementById(id).value.trim();
+  const kind = get("f-kind"), endpoint = get("f-endpoint"), slave = get("f-slave"), fn = get("f-function");
+  if (kind && e.kind !== kind) return false;
+  if (endpoint && !String(e.endpoint ?? e.device ?? "").includes(endpoint)) return false;
+  if (slave && String(e.slave) !== slave) return false;
+  if (fn && String(e.function) !== fn && e.function_name !== fn) return false;
+  return true;
+}
+function what(e) {
+  if (e.kind === "modbus") {
+    const parts = [e.function_name || e.error || ""];
+    if (e.address !== undefined) parts.push(`@${e.address}`);
+    if (e.count !== undefined) parts.push(`x${e.count}`);
+    if (e.exception !== undefined) parts.push(`exception ${e.exception}`);
+    parts.push(e.hex || "");
+    return parts.join(" ");
+  }
+  if (e.kind === "serial") return `ch ${e.channel} ${JSON.stringify(e.text)}`;
+  if (e.kind === "led") return `${e.led} ${e.was} -> ${e.state}`;
+  if (e.kind === "clock") return `${e.what}`;
+  if (e.kind === "dropped") return `${e.count} events dropped (the page did not keep up)`;
+  return JSON.stringify(e);
+}
+function drawTraffic() {
+  traffic.dirty = false;
+  const body = document.querySelector("#traffic-table tbody");
+  const rows = [];
+  for (let i = traffic.events.length - 1; i >= 0 && rows.length < TRAFFIC_SHOWN; i -= 1) {
+    const e = traffic.events[i];
+    if (!matches(e)) continue;
+    rows.push(`<tr class="k-${esc(e.kind)}"><td>${Number(e.t_s).toFixed(3)}</td><td>${esc(e.kind)}</td><td>${esc(e.device)}</td><td>${esc(e.dir ?? "")}</td><td>${esc(what(e))}</td></tr>`);
+  }
+  body.innerHTML = rows.join("");
+  document.getElementById("traffic-count").textContent = `${rows.length} shown of ${traffic.events.length} kept`;
+}
+function connectEvents(delay = 1000) {
+  const url = new URL("/events", location.href);
+  url.protocol = location.protocol === "https:" ? "wss:" : "ws:";
+  url.searchParams.set("kind", "modbus,serial,led,clock");
+  url.searchParams.set("queue", "2000");
+  if (TOKEN) url.searchParams.set("token", TOKEN);
+  const ws = new WebSocket(url);
+  ws.onmessage = (message) => {
+    const e = JSON.parse(message.data);
+    stats.events += 1;
+    if (e.kind === "serial") lastSerial.set(`${e.device} ${e.channel} ${e.dir}`, e.text);
+    traffic.events.push(e);
+    if (traffic.events.length > TRAFFIC_KEPT) traffic.events.splice(0, traffic.events.length - TRAFFIC_KEPT);
+    traffic.dirty = true;
+  };
+  ws.onopen = () => { delay = 1000; };
+  ws.onclose = () => setTimeout(() => connectEvents(Math.min(delay * 2, 30000)), delay);
+}
+function wireTraffic() {
+  for (const id of ["f-kind", "f-endpoint", "f-slave", "f-function"]) {
+    document.getElementById(id).addEventListener("input", drawTraffic);
+  }
+  const hold = document.getElementById("traffic-pause");
+  hold.addEventListener("click", () => { traffic.held = !traffic.held; hold.textContent = traffic.held ? "follow" : "hold"; });
+  document.getElementById("traffic-clear").addEventListener("click", () => { traffic.events = []; drawTraffic(); });
+  setInterval(() => { if (traffic.dirty && !traffic.held) drawTraffic(); }, 500);
+}
+
+window.__fieldtwinTrends = trends;
+wireHeader();
+wireTextBlock();
+wireTrends();
+wireTraffic();
+connectEvents();
+startPolling();
