@@ -76,7 +76,9 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--trace", metavar="FILE", help="write the traffic as JSON lines")
     run.add_argument("--pcap", metavar="FILE", help="write the Modbus TCP traffic as a pcap")
     run.add_argument(
-        "--record", metavar="FILE", help="record the session for `fieldtwin replay` (docs/record.md)"
+        "--record",
+        metavar="FILE",
+        help="record the session for `fieldtwin replay` (docs/record.md)",
     )
     _control_options(run)
     con = sub.add_parser("console", help="the programming terminal")

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import argparse
 import tempfile
-import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -23,7 +22,7 @@ from typing import Any
 from fieldtwin.clock import MS
 from fieldtwin.control.resources import Control
 from fieldtwin.errors import ConfigError, FieldtwinError
-from fieldtwin.plant import Plant, build_plant, embedded_plant, read_plant
+from fieldtwin.plant import Plant, PlantFile, build_plant, embedded_plant, read_plant
 from fieldtwin.runtime.binder import bind
 from fieldtwin.runtime.record import (
     CharsFeed,
@@ -35,6 +34,7 @@ from fieldtwin.runtime.record import (
     read_recording,
 )
 from fieldtwin.runtime.replay import ReplayClock, ReplayRunner, compare
+from fieldtwin.runtime.wall import SystemWall
 from fieldtwin.transports.virtual import Wiring
 
 # The control API's commands that are recorded (docs/record.md): every Control method a
@@ -87,9 +87,10 @@ def replay(path: str | Path, plant_path: str | Path | None = None) -> Outcome:
             plant_file = embedded_plant(header, str(path), Path(tmp))
         else:
             plant_file = read_plant(plant_path)
-        started = time.perf_counter()
-        produced, sim_us = _play(header, plant_file, inputs, end)
-        wall = time.perf_counter() - started
+        wall_clock = SystemWall()
+        started = wall_clock.monotonic()
+        produced, sim_us = _play(header, plant_file, inputs, end, wall_clock)
+        wall = wall_clock.monotonic() - started
     difference = compare(expected, produced)
     return Outcome(
         difference is None,
@@ -103,10 +104,14 @@ def replay(path: str | Path, plant_path: str | Path | None = None) -> Outcome:
 
 
 def _play(
-    header: Header, plant_file: Any, inputs: Sequence[Record], end: Record | None
+    header: Header,
+    plant_file: PlantFile,
+    inputs: Sequence[Record],
+    end: Record | None,
+    wall: SystemWall,
 ) -> tuple[list[Record], int]:
     clock = ReplayClock()
-    runner = ReplayRunner(clock, header.speed, inputs)
+    runner = ReplayRunner(clock, header.speed, inputs, wall)
     with Wiring():
         plant = build_plant(plant_file, runner=runner, speed=header.speed)
         try:

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from fieldtwin.clock import SimClock
 from fieldtwin.runtime.record import Keys, Record
 from fieldtwin.runtime.runner import CloseCallback, ConnectCallback, DataCallback, Runner
+from fieldtwin.runtime.wall import WallClock
 from fieldtwin.transports.base import Listener, Transport
 from fieldtwin.transports.virtual import VirtualListener
 
@@ -65,8 +66,14 @@ Dispatch = Callable[[Record], None]
 class ReplayRunner(Runner):
     """A runner fed by recorded inputs (see the module docstring)."""
 
-    def __init__(self, clock: ReplayClock, speed: float | None, inputs: Sequence[Record]) -> None:
-        super().__init__(clock, speed, report=lambda text: None)
+    def __init__(
+        self,
+        clock: ReplayClock,
+        speed: float | None,
+        inputs: Sequence[Record],
+        wall: WallClock | None = None,
+    ) -> None:
+        super().__init__(clock, speed, wall=wall, report=lambda text: None)
         self.replay_clock = clock
         self.inputs = list(inputs)
         self.pos = 0
