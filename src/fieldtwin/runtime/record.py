@@ -46,10 +46,12 @@ from typing import Any
 from fieldtwin import __version__
 from fieldtwin.clock import MS, Handle, SimClock
 from fieldtwin.devices.face import Device
+from fieldtwin.devices.tes import TesDevice
 from fieldtwin.errors import ConfigError, FieldtwinError
 from fieldtwin.runtime.events import Event, EventBus, Subscription
 from fieldtwin.runtime.runner import CloseCallback, ConnectCallback, DataCallback, Runner
 from fieldtwin.transports.base import Listener, Transport
+from fieldtwin.words import parse_word
 
 FORMAT = "fieldtwin-recording"
 VERSION = 1
@@ -61,6 +63,7 @@ INPUTS = frozenset({"bind", "accept", "data", "close", "call", "line", "ret"})
 OUTPUTS = frozenset({"send", "result", "object", "led", "chars"})
 
 Record = list[Any]
+ORIGINAL_SEND = "_fieldtwin_unrecorded_send"  # where a recorded transport keeps its send
 
 
 @dataclass(frozen=True, slots=True)
@@ -214,7 +217,7 @@ class Sampler:
         self.emit = emit
         self.period_us = period_us
         self._seen: dict[tuple[str, str, str], object] = {}
-        self._names: dict[int, list[str]] = {}
+        self._names: dict[int, list[tuple[str, Callable[[], object]]]] = {}
         self._timer: Handle | None = clock.schedule(clock.now, self._sample, SAMPLE_PRIORITY)
 
     def _sample(self, now: int) -> None:
@@ -226,17 +229,28 @@ class Sampler:
             address = str(device.address)
             for name, state in device.status().leds:
                 self._change(now, "led", address, name, str(state))
-            objects = device.objects()
-            names = self._names.get(id(device))
-            if names is None:
-                names = [entry.split()[0] for entry in objects.names()[:MAX_OBJECTS]]
-                self._names[id(device)] = names
-            for name in names:
+            for name, peek in self._peekers(device):
                 try:
-                    value: object = objects.peek(name)
+                    value: object = peek()
                 except FieldtwinError:
                     value = None  # a module out of its slot, a word its model lacks
                 self._change(now, "object", address, name, value)
+
+    def _peekers(self, device: Device) -> list[tuple[str, Callable[[], object]]]:
+        """(name, peek) of every object of ``device``, made once (a TES word by its
+        number: no name to parse on every look)."""
+        found = self._names.get(id(device))
+        if found is not None:
+            return found
+        objects = device.objects()
+        names = [entry.split()[0] for entry in objects.names()[:MAX_OBJECTS]]
+        if isinstance(device, TesDevice):
+            tes = device.tes
+            found = [(name, _bind(tes.peek, parse_word(name))) for name in names]
+        else:
+            found = [(name, _bind(objects.peek, name)) for name in names]
+        self._names[id(device)] = found
+        return found
 
     def _change(self, now: int, kind: str, address: str, name: str, value: object) -> None:
         key = (kind, address, name)
@@ -249,6 +263,10 @@ class Sampler:
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
+
+
+def _bind(peek: Callable[[Any], int], name: object) -> Callable[[], object]:
+    return lambda: peek(name)
 
 
 def chars_record(event: Event) -> Record:
@@ -317,13 +335,15 @@ class Recorder:
         self, transport: Transport, on_data: DataCallback, on_close: CloseCallback | None
     ) -> tuple[DataCallback, CloseCallback | None]:
         key = self.keys.link()
-        send = transport.send
+        # the instance's own send, wrapped once (attached again: the first send, a new key)
+        send: Callable[[bytes], None] = getattr(transport, ORIGINAL_SEND, transport.send)
 
         def sending(data: bytes) -> None:
             self.writer.add(["send", self.clock.now, key, bytes(data).hex()])
             send(data)
 
-        setattr(transport, "send", sending)  # noqa: B010 - the instance's own send, wrapped
+        setattr(transport, ORIGINAL_SEND, send)
+        setattr(transport, "send", sending)  # noqa: B010
 
         def arrived(data: bytes, now: int) -> None:
             self._input("data", key, data.hex())

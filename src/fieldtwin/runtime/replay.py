@@ -231,7 +231,27 @@ def show(record: Record | None) -> str:
         return f"t = {t_us / 1e6:.6f} s  {kind} {rest[0]} {rest[1]} = {rest[2]}"
     if kind == "result":
         return f"t = {t_us / 1e6:.6f} s  result of {rest[0]}: {json.dumps(rest[1])[:200]}"
-    return f"t = {t_us / 1e6:.6f} s  {kind} " + " ".join(str(r) for r in rest)
+    at = f"t = {t_us / 1e6:.6f} s"
+    if kind in INPUT_FORMS and len(rest) >= 1:
+        fired, fields = rest[0], rest[1:]
+        return f"{at}  {INPUT_FORMS[kind](fields)}  (after {fired} clock events)"
+    return f"{at}  {kind} " + " ".join(str(r) for r in rest)
+
+
+def _call(fields: Sequence[object]) -> str:
+    args = fields[1] if len(fields) > 1 and isinstance(fields[1], list) else []
+    return f"control {fields[0]}({', '.join(json.dumps(a) for a in args)})"
+
+
+INPUT_FORMS: dict[str, Callable[[Sequence[object]], str]] = {
+    "data": lambda f: f"data {f[0]}  {_spaced(str(f[1]))}",
+    "accept": lambda f: f"accept on {f[0]}",
+    "close": lambda f: f"close {f[0]}",
+    "bind": lambda f: f"bind {' '.join(str(g) for g in f[0])}",  # type: ignore[attr-defined]
+    "line": lambda f: f"console {str(f[0])!r}",
+    "call": _call,
+    "ret": lambda f: "(the command returned)",
+}
 
 
 def _spaced(hex_text: str, limit: int = 64) -> str:
