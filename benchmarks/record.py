@@ -13,6 +13,7 @@ Run:  .venv/bin/python benchmarks/record.py [simulated_seconds]   (default 120)
 
 from __future__ import annotations
 
+import contextlib
 import re
 import socket
 import struct
@@ -36,10 +37,8 @@ def _request(sock: socket.socket, transaction: int, unit: int, function: int) ->
 
 
 def _answered(sock: socket.socket, buffer: bytearray) -> bool:
-    try:
+    with contextlib.suppress(BlockingIOError):
         buffer += sock.recv(4096)
-    except BlockingIOError:
-        pass
     return len(buffer) >= 6 and len(buffer) >= 6 + buffer[5]
 
 

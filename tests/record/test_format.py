@@ -27,7 +27,9 @@ name = "aem only"
 type = "TSX AEM 811"
 rack = 0
 slot = 5
-inputs = [{ channel = 0, milliamps = { kind = "sine", offset = 12.0, amplitude = 6.0, period_s = 2 } }]
+inputs = [
+  { channel = 0, milliamps = { kind = "sine", offset = 12.0, amplitude = 6.0, period_s = 2 } },
+]
 
 [[tes]]
 model = "TES 8EA"

@@ -5,6 +5,7 @@ gives the very same outputs."""
 
 from __future__ import annotations
 
+import contextlib
 import select
 import socket
 import struct
@@ -17,6 +18,7 @@ from hypothesis import strategies as st
 
 from fieldtwin.clock import MS, SimClock
 from fieldtwin.console import Console
+from fieldtwin.errors import FieldtwinError
 from fieldtwin.plant import build_plant, read_plant
 from fieldtwin.replay import replay
 from fieldtwin.runtime.runner import Runner
@@ -53,7 +55,7 @@ def plants(draw: Any) -> str:
     if draw(st.booleans()):
         milliamps = draw(st.floats(4.0, 20.0)).__round__(2)
         parts.append(
-            "[[module]]\ntype = \"TSX AEM 811\"\nrack = 0\nslot = 5\ninputs = [\n"
+            '[[module]]\ntype = "TSX AEM 811"\nrack = 0\nslot = 5\ninputs = [\n'
             f"  {{ channel = 0, milliamps = {milliamps} }},\n"
             '  { channel = 1, milliamps = { kind = "sine", offset = 12.0, amplitude = 4.0,'
             " period_s = 1 } },\n]\n"
@@ -61,8 +63,10 @@ def plants(draw: Any) -> str:
     for slave in range(1, count + 1):
         analog = draw(st.booleans())
         model = draw(st.sampled_from(ANALOG if analog else DIGITAL))
-        inputs = "" if model == "TES 32ST" else (
-            _analog_inputs(draw) if analog else _digital_inputs(draw)
+        inputs = (
+            ""
+            if model == "TES 32ST"
+            else (_analog_inputs(draw) if analog else _digital_inputs(draw))
         )
         parts.append(
             f'[[tes]]\nmodel = "{model}"\nslave = {slave}\n'
@@ -126,10 +130,8 @@ class _Master:
 
     def answered(self) -> bool:
         if select.select([self.sock], [], [], 0)[0]:
-            try:
+            with contextlib.suppress(BlockingIOError):
                 self.received += self.sock.recv(4096)
-            except BlockingIOError:
-                pass
         return len(self.received) >= 6 and len(self.received) >= 6 + self.received[5]
 
     def take(self) -> None:
@@ -161,10 +163,8 @@ def _session(text: str, actions: list[tuple[str, Any]], directory: Path) -> Path
                     runner.run_until(master.answered, REPLY_WAIT_US)
                     master.take()
                 elif kind == "console":
-                    try:
+                    with contextlib.suppress(FieldtwinError):  # a mistake is recorded too
                         console.execute(arg)
-                    except Exception:  # noqa: BLE001 - a user's mistake is recorded too
-                        pass
                 else:
                     master.close()
                     runner.run_until(lambda: False, 20 * MS)  # the close is seen
