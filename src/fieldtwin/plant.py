@@ -143,6 +143,8 @@ class Plant:
         """Open the TES Modbus endpoints; returns one 'listening: ...' line each."""
         from fieldtwin.runtime.binder import MODBUS, bind
 
+        if self.recorder is not None and runner.tap is None:
+            runner.set_tap(self.recorder)  # recorded since before the endpoints opened
         self.note_bound((MODBUS,))
         binding = bind(self.devices, runner, groups=(MODBUS,), events=self.events)
         self.bindings.append(binding)
@@ -168,7 +170,12 @@ class Plant:
                 f" {self.clock.now / 1e6:g} s): a replay starts from the plant file at t = 0"
             )
         pacer = runner or (self.plc.runner if self.plc is not None else None)
-        header = recording_header(self.source or read_plant(None), self.speed)
+        if self.source is None:
+            raise ConfigError(
+                "plant.record: this plant was not built from a plant file (build_plant,"
+                " load_plant): a replay rebuilds the plant from its file"
+            )
+        header = recording_header(self.source, self.speed)
         recorder = Recorder(path, header, self.clock, self.devices, self.events)
         for groups in self.bound:
             recorder.bound(groups)

@@ -23,6 +23,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from fieldtwin.clock import SimClock
+from fieldtwin.errors import ConfigError
 from fieldtwin.runtime.record import Keys, Record
 from fieldtwin.runtime.runner import CloseCallback, ConnectCallback, DataCallback, Runner
 from fieldtwin.runtime.wall import WallClock
@@ -115,7 +116,9 @@ class ReplayRunner(Runner):
     # --- runs -------------------------------------------------------------------------
 
     def advance(self, duration_us: int) -> None:
-        self._run(self.clock.now + max(0, duration_us), None)
+        if duration_us < 0:
+            raise ConfigError(f"cannot advance by a negative time ({duration_us} us)")
+        self._run(self.clock.now + duration_us, None)
 
     def play(self) -> None:
         """Deliver every input, in order (the top level: a stray ``ret`` is passed)."""
