@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import gzip
 import json
+import zlib
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -46,6 +47,7 @@ from typing import Any
 from fieldtwin import __version__
 from fieldtwin.clock import MS, Handle, SimClock
 from fieldtwin.devices.face import Device
+from fieldtwin.devices.module import ModuleDevice, PlcObjects
 from fieldtwin.devices.tes import TesDevice
 from fieldtwin.errors import ConfigError, FieldtwinError
 from fieldtwin.runtime.events import Event, EventBus, Subscription
@@ -185,7 +187,7 @@ def read_recording(path: str | Path) -> tuple[Header, list[Record]]:
                 if item[0] not in INPUTS and item[0] not in OUTPUTS and item[0] != "end":
                     raise ConfigError(f"{where}: line {number}: unknown record {item[0]!r}")
                 records.append(item)
-    except OSError as exc:  # gzip.BadGzipFile is an OSError
+    except (OSError, zlib.error) as exc:  # gzip.BadGzipFile is an OSError
         raise ConfigError(f"{where}: cannot read the recording ({exc})") from None
     except EOFError:
         raise ConfigError(f"{where}: the recording is cut short (not closed?)") from None
@@ -247,6 +249,9 @@ class Sampler:
         if isinstance(device, TesDevice):
             tes = device.tes
             found = [(name, _bind(tes.peek, parse_word(name))) for name in names]
+        elif isinstance(device, ModuleDevice) and isinstance(objects, PlcObjects):
+            # the module's own PL7 objects (its names): the PLC reads them, no side effect
+            found = [(name, _bind(device.plc.read, name)) for name in names]
         else:
             found = [(name, _bind(objects.peek, name)) for name in names]
         self._names[id(device)] = found
