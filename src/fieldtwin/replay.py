@@ -25,15 +25,17 @@ from fieldtwin.errors import ConfigError, FieldtwinError
 from fieldtwin.plant import Plant, PlantFile, build_plant, embedded_plant, read_plant
 from fieldtwin.runtime.binder import bind
 from fieldtwin.runtime.record import (
+    INPUTS,
+    OUTPUTS,
     CharsFeed,
     Header,
     Record,
     Sampler,
-    inputs_and_outputs,
+    iter_records,
     plain_json,
-    read_recording,
+    read_header,
 )
-from fieldtwin.runtime.replay import ReplayClock, ReplayRunner, compare
+from fieldtwin.runtime.replay import Comparer, ReplayClock, ReplayRunner
 from fieldtwin.runtime.wall import SystemWall
 from fieldtwin.transports.virtual import Wiring
 
@@ -78,10 +80,14 @@ class Outcome:
 
 
 def replay(path: str | Path, plant_path: str | Path | None = None) -> Outcome:
-    """Replay the recording ``path`` (against ``plant_path`` when given)."""
-    header, records = read_recording(path)
-    inputs, expected = inputs_and_outputs(records)
-    end = next((r for r in reversed(records) if r[0] == "end"), None)
+    """Replay the recording ``path`` (against ``plant_path`` when given).
+
+    Two passes over the file: the inputs (and the end) first, then the recorded
+    outputs, compared one by one as the replay produces them."""
+    header = read_header(path)
+    inputs = list(iter_records(path, INPUTS | {"end"}))
+    end = inputs.pop() if inputs and inputs[-1][0] == "end" else None
+    comparer = Comparer(iter_records(path, OUTPUTS))
     with tempfile.TemporaryDirectory(prefix="fieldtwin-replay-") as tmp:
         if plant_path is None:
             plant_file = embedded_plant(header, str(path), Path(tmp))
@@ -89,14 +95,14 @@ def replay(path: str | Path, plant_path: str | Path | None = None) -> Outcome:
             plant_file = read_plant(plant_path)
         wall_clock = SystemWall()
         started = wall_clock.monotonic()
-        produced, sim_us = _play(header, plant_file, inputs, end, wall_clock)
+        sim_us = _play(header, plant_file, inputs, end, comparer, wall_clock)
         wall = wall_clock.monotonic() - started
-    difference = compare(expected, produced)
+    difference = comparer.finish()
     return Outcome(
         difference is None,
         None if difference is None else difference.text,
-        len(expected),
-        len(produced),
+        comparer.expected,
+        comparer.produced,
         len(inputs),
         sim_us,
         wall,
@@ -108,15 +114,17 @@ def _play(
     plant_file: PlantFile,
     inputs: Sequence[Record],
     end: Record | None,
+    out: Comparer,
     wall: SystemWall,
-) -> tuple[list[Record], int]:
+) -> int:
     clock = ReplayClock()
     runner = ReplayRunner(clock, header.speed, inputs, wall)
+    runner.out = out
     with Wiring():
         plant = build_plant(plant_file, runner=runner, speed=header.speed)
         try:
-            chars = CharsFeed(plant.events, runner.out.append)
-            sampler = Sampler(clock, plant.devices, runner.out.append, header.sample_ms * MS)
+            chars = CharsFeed(plant.events, out.append)
+            sampler = Sampler(clock, plant.devices, out.append, header.sample_ms * MS)
             control = Control(plant, runner, plant.events)
             runner.dispatch = _Dispatcher(plant, runner, control)
             runner.play()
@@ -126,7 +134,7 @@ def _play(
             sampler.close()
         finally:
             plant.close()
-    return runner.out, clock.now
+    return clock.now
 
 
 class _Dispatcher:
@@ -163,19 +171,20 @@ class _Dispatcher:
 
 
 def diff(a: str | Path, b: str | Path) -> str | None:
-    """The first difference between two recordings (inputs first, then outputs), or None."""
-    _, records_a = read_recording(a)
-    _, records_b = read_recording(b)
-    inputs_a, outputs_a = inputs_and_outputs(records_a)
-    inputs_b, outputs_b = inputs_and_outputs(records_b)
-    parts: list[str] = []
+    """The first difference between two recordings (inputs first, then outputs), or None;
+    both are read as streams, never whole."""
+    read_header(a)
+    read_header(b)
     names = (str(a), str(b))
-    found = compare(inputs_a, inputs_b, names=names)
-    if found is not None:
-        parts.append("inputs: " + found.text.replace("output", "input", 1))
-    found = compare(outputs_a, outputs_b, names=names)
-    if found is not None:
-        parts.append("outputs: " + found.text)
+    parts: list[str] = []
+    for label, kinds in (("inputs", INPUTS), ("outputs", OUTPUTS)):
+        comparer = Comparer(iter_records(a, kinds), names=names)
+        for record in iter_records(b, kinds):
+            comparer.append(record)
+        found = comparer.finish()
+        if found is not None:
+            text = found.text.replace("output", "input", 1) if label == "inputs" else found.text
+            parts.append(f"{label}: {text}")
     return "\n".join(parts) if parts else None
 
 

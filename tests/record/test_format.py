@@ -173,3 +173,24 @@ def test_a_shorter_stream_is_a_difference() -> None:
     assert found is not None and found.index == 1
     assert "(nothing: the stream has ended)" in found.text
     assert "t = 0.001000 s  send t1  01 02" in found.text
+
+
+def test_a_damaged_stream_is_named_not_a_traceback(tmp_path: Path) -> None:
+    record = _session(tmp_path)
+    data = bytearray(record.read_bytes())
+    middle = len(data) // 2
+    data[middle : middle + 64] = bytes(64)  # zeroes inside the deflate stream
+    record.write_bytes(bytes(data))
+    with pytest.raises(ConfigError, match=f"{record}: (cannot read the recording|line )"):
+        replay(record)
+
+
+def test_the_streamed_comparison_counts_every_record_and_keeps_only_the_context() -> None:
+    expected = [["send", t, "t1", "00"] for t in range(1000)]
+    actual = [*expected[:500], ["send", 500, "t1", "ff"], *expected[501:]]
+    found = compare(expected, actual)
+    assert found is not None and found.index == 500
+    assert found.text.startswith("first difference at output 501 (of 1000 recorded):")
+    assert found.text.count("same ") == 3  # the context before it, not the 500
+    assert "- recorded t = 0.000500 s  send t1  00" in found.text
+    assert "+ replayed t = 0.000500 s  send t1  ff" in found.text

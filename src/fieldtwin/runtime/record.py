@@ -39,7 +39,8 @@ from __future__ import annotations
 import gzip
 import json
 import zlib
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -174,24 +175,39 @@ class RecordWriter:
 
 def read_recording(path: str | Path) -> tuple[Header, list[Record]]:
     """The header and the records of a recording; errors name the file and the line."""
+    return read_header(path), list(iter_records(path))
+
+
+def read_header(path: str | Path) -> Header:
     where = str(path)
+    with _reading(where), gzip.open(path, "rb") as file:
+        return Header.from_json(_json(file.readline(MAX_HEADER_BYTES), where, 1), where)
+
+
+def iter_records(path: str | Path, kinds: Collection[str] | None = None) -> Iterator[Record]:
+    """The records after the header, one at a time (of ``kinds`` only, when given): a
+    recording of hours is never held in memory whole."""
+    where = str(path)
+    with _reading(where), gzip.open(path, "rb") as file:
+        file.readline(MAX_HEADER_BYTES)
+        for number, line in enumerate(file, start=2):
+            item = _json(line, where, number)
+            if not isinstance(item, list) or not item or not isinstance(item[0], str):
+                raise ConfigError(f"{where}: line {number}: not a record")
+            if item[0] not in INPUTS and item[0] not in OUTPUTS and item[0] != "end":
+                raise ConfigError(f"{where}: line {number}: unknown record {item[0]!r}")
+            if kinds is None or item[0] in kinds:
+                yield item
+
+
+@contextmanager
+def _reading(where: str) -> Iterator[None]:
     try:
-        with gzip.open(path, "rb") as file:
-            first = file.readline(MAX_HEADER_BYTES)
-            header = Header.from_json(_json(first, where, 1), where)
-            records: list[Record] = []
-            for number, line in enumerate(file, start=2):
-                item = _json(line, where, number)
-                if not isinstance(item, list) or not item or not isinstance(item[0], str):
-                    raise ConfigError(f"{where}: line {number}: not a record")
-                if item[0] not in INPUTS and item[0] not in OUTPUTS and item[0] != "end":
-                    raise ConfigError(f"{where}: line {number}: unknown record {item[0]!r}")
-                records.append(item)
+        yield
     except (OSError, zlib.error) as exc:  # gzip.BadGzipFile is an OSError
         raise ConfigError(f"{where}: cannot read the recording ({exc})") from None
     except EOFError:
         raise ConfigError(f"{where}: the recording is cut short (not closed?)") from None
-    return header, records
 
 
 def _json(line: bytes, where: str, number: int) -> object:
@@ -447,6 +463,8 @@ __all__ = [
     "Sampler",
     "chars_record",
     "inputs_and_outputs",
+    "iter_records",
     "plain_json",
+    "read_header",
     "read_recording",
 ]

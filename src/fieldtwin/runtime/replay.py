@@ -19,8 +19,10 @@ from __future__ import annotations
 
 import heapq
 import json
-from collections.abc import Callable, Sequence
+from collections import deque
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
+from typing import Protocol
 
 from fieldtwin.clock import SimClock
 from fieldtwin.errors import ConfigError
@@ -64,6 +66,10 @@ class ReplayClock(SimClock):
 Dispatch = Callable[[Record], None]
 
 
+class Outputs(Protocol):
+    def append(self, record: Record, /) -> None: ...
+
+
 class ReplayRunner(Runner):
     """A runner fed by recorded inputs (see the module docstring)."""
 
@@ -78,7 +84,7 @@ class ReplayRunner(Runner):
         self.replay_clock = clock
         self.inputs = list(inputs)
         self.pos = 0
-        self.out: list[Record] = []
+        self.out: Outputs = []  # or a Comparer: what the replay produces goes there
         self.dispatch: Dispatch | None = None  # commands and binds (fieldtwin.replay)
         self.keys = Keys()
         self._handlers: dict[str, tuple[Transport, DataCallback, CloseCallback | None]] = {}
@@ -270,29 +276,69 @@ def compare(
     names: tuple[str, str] = ("recorded", "replayed"),
 ) -> Difference | None:
     """The first difference of two output streams (same record, same instant), or None."""
-    index = next(
-        (i for i, (a, b) in enumerate(zip(expected, actual, strict=False)) if a != b),
-        None,
-    )
-    if index is None:
-        if len(expected) == len(actual):
-            return None
-        index = min(len(expected), len(actual))
-    lines = [f"first difference at output {index + 1} (of {len(expected)} {names[0]}):"]
-    start = max(0, index - CONTEXT)
-    for i in range(start, index):
-        lines.append(f"    same      {show(expected[i])}")
-    left = expected[index] if index < len(expected) else None
-    right = actual[index] if index < len(actual) else None
-    width = max(len(n) for n in names)
-    lines.append(f"  - {names[0]:<{width}} {show(left)}")
-    lines.append(f"  + {names[1]:<{width}} {show(right)}")
-    for name, stream in zip(names, (expected, actual), strict=True):
-        after = stream[index + 1 : index + 1 + CONTEXT]
-        if after:
-            lines.append(f"    then, {name}:")
-            lines.extend(f"        {show(r)}" for r in after)
-    return Difference(index, "\n".join(lines))
+    comparer = Comparer(iter(expected), names=names)
+    for record in actual:
+        comparer.append(record)
+    return comparer.finish()
 
 
-__all__ = ["Difference", "ReplayClock", "ReplayRunner", "compare", "show"]
+class Comparer:
+    """Compares records as a replay produces them with the expected ones, one by one:
+    only the context of the first difference is kept (bounded memory)."""
+
+    def __init__(
+        self, expected: Iterator[Record], *, names: tuple[str, str] = ("recorded", "replayed")
+    ) -> None:
+        self._expected = expected
+        self.names = names
+        self.expected = 0  # expected records seen (all of them once finished)
+        self.produced = 0
+        self._before: deque[Record] = deque(maxlen=CONTEXT)
+        self.index: int | None = None
+        self._left: Record | None = None
+        self._right: Record | None = None
+        self._after_right: list[Record] = []
+
+    def _next(self) -> Record | None:
+        record = next(self._expected, None)
+        if record is not None:
+            self.expected += 1
+        return record
+
+    def append(self, record: Record) -> None:
+        self.produced += 1
+        if self.index is None:
+            wanted = self._next()
+            if wanted == record:
+                self._before.append(record)
+                return
+            self.index, self._left, self._right = self.produced - 1, wanted, record
+        elif len(self._after_right) < CONTEXT:
+            self._after_right.append(record)
+
+    def finish(self) -> Difference | None:
+        """Once the replay has ended: the first difference, or None."""
+        if self.index is None:
+            wanted = self._next()
+            if wanted is None:
+                return None
+            self.index, self._left, self._right = self.produced, wanted, None
+        after_left: list[Record] = []
+        while len(after_left) < CONTEXT and (record := self._next()) is not None:
+            after_left.append(record)
+        while self._next() is not None:  # how many there were, for the text
+            pass
+        names, index = self.names, self.index
+        lines = [f"first difference at output {index + 1} (of {self.expected} {names[0]}):"]
+        lines.extend(f"    same      {show(r)}" for r in self._before)
+        width = max(len(n) for n in names)
+        lines.append(f"  - {names[0]:<{width}} {show(self._left)}")
+        lines.append(f"  + {names[1]:<{width}} {show(self._right)}")
+        for name, after in zip(names, (after_left, self._after_right), strict=True):
+            if after:
+                lines.append(f"    then, {name}:")
+                lines.extend(f"        {show(r)}" for r in after)
+        return Difference(index, "\n".join(lines))
+
+
+__all__ = ["Comparer", "Difference", "ReplayClock", "ReplayRunner", "compare", "show"]
