@@ -38,7 +38,7 @@ def _poll(run: Run, seconds: float) -> int:
 
 
 def _control(run: Run) -> None:
-    """A control-API input change and console lines (one of them runs the clock)."""
+    """A control-API input change, console lines (one runs the clock), clock commands."""
     from fieldtwin.control.client import Client
 
     assert run.control is not None
@@ -47,6 +47,10 @@ def _control(run: Run) -> None:
         client.console("tes 1 input 3 = true")
         client.console("advance 300ms")
         client.console("no such command")
+        client.pause()  # held, stepped while held (its run delivers nothing new), resumed
+        client.step(150)
+        client.write("tes1", "H'100'", 5)
+        client.resume()
 
 
 @pytest.fixture(scope="module")
@@ -84,6 +88,7 @@ def test_the_recording_holds_the_session(recorded: tuple[Path, Path]) -> None:
     assert lines == ["tes 1 input 3 = true", "advance 300ms", "no such command"]
     calls = [r[3:] for r in _records(record) if r[0] == "call"]
     assert ["set_input", ["tes2", "a1", 7.25, None]] in calls
+    assert [c[0] for c in calls][-4:] == ["pause", "step", "write_object", "resume"]
 
 
 def test_replay_is_identical(recorded: tuple[Path, Path]) -> None:
