@@ -75,6 +75,11 @@ def _parser() -> argparse.ArgumentParser:
     )
     run.add_argument("--trace", metavar="FILE", help="write the traffic as JSON lines")
     run.add_argument("--pcap", metavar="FILE", help="write the Modbus TCP traffic as a pcap")
+    run.add_argument(
+        "--record",
+        metavar="FILE",
+        help="record the session for `fieldtwin replay` (docs/record.md)",
+    )
     _control_options(run)
     con = sub.add_parser("console", help="the programming terminal")
     con.add_argument("plant", nargs="?", help="plant file (TOML); default: the embedded plant")
@@ -98,6 +103,9 @@ def _parser() -> argparse.ArgumentParser:
     from fieldtwin.tracecli import add_parser as add_trace_parser
 
     add_trace_parser(sub)
+    from fieldtwin.replay import add_parsers as add_replay_parsers
+
+    add_replay_parsers(sub)
     return parser
 
 
@@ -144,6 +152,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             from fieldtwin.tracecli import run_trace
 
             return run_trace(args)
+        if args.command in ("replay", "diff"):
+            from fieldtwin.replay import run_diff, run_replay
+
+            return run_replay(args) if args.command == "replay" else run_diff(args)
         return _console(args)
     except FieldtwinError as exc:
         print(f"fieldtwin: {exc}", file=sys.stderr)
@@ -156,7 +168,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _run(args: argparse.Namespace) -> int:
     from fieldtwin.live import plain_status, render
     from fieldtwin.plant import build_plant, plant_speed, read_plant
-    from fieldtwin.runtime.binder import bind
+    from fieldtwin.runtime.binder import ALL, bind
     from fieldtwin.runtime.exposure import warnings_for
     from fieldtwin.runtime.runner import Runner
 
@@ -169,9 +181,15 @@ def _run(args: argparse.Namespace) -> int:
     control: Launched | None = None
     try:
         recorders = _recorders(args, plant.events)  # before any port opens: no frame is missed
+        _start_recording(args, plant, runner, recorders)
         # the control API starts before any port opens: its imports and its server's start
         # take a second, and a master connecting at the `running` line must be served
         control = _start_control(args, plant, runner, plant.events)
+        if control is not None and plant.recorder is not None:
+            from fieldtwin.replay import CONTROL_COMMANDS
+
+            plant.recorder.instrument(control.server.control, CONTROL_COMMANDS)
+        plant.note_bound(ALL)
         binding = bind(plant.devices, runner, events=plant.events)  # every port, once built
     except BaseException:
         if control is not None:
@@ -252,6 +270,22 @@ def _recorders(args: argparse.Namespace, events: EventBus) -> Binding:
         recorders.close()
         raise
     return recorders
+
+
+def _start_recording(
+    args: argparse.Namespace, plant: Plant, runner: Runner, recorders: Binding
+) -> None:
+    """--record FILE: the plant's inputs and outputs from t = 0 (docs/record.md)."""
+    if not args.record:
+        return
+    from fieldtwin.plant import recording_header
+    from fieldtwin.runtime.record import Recorder
+
+    assert plant.source is not None
+    header = recording_header(plant.source, runner.speed)
+    recorder = Recorder(args.record, header, plant.clock, plant.devices, plant.events, runner)
+    plant.recorder = recorder
+    recorders.add([], recorder.close)
 
 
 def _start_control(

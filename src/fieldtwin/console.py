@@ -119,7 +119,14 @@ class Console:
         return self.plant.plc
 
     def execute(self, line: str) -> list[str]:
-        """Run one command line; returns its output lines."""
+        """Run one command line; returns its output lines (recorded: plant.record)."""
+        recorder = self.plant.recorder
+        if recorder is not None:
+            lines: list[str] = recorder.command("line", line, (), lambda: self._execute(line))
+            return lines
+        return self._execute(line)
+
+    def _execute(self, line: str) -> list[str]:
         try:
             words = split_line(line)
         except ValueError as exc:

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import re
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -51,6 +51,7 @@ from fieldtwin.words import plant_word
 
 if TYPE_CHECKING:
     from fieldtwin.runtime.binder import Binding
+    from fieldtwin.runtime.record import Header, Recorder
     from fieldtwin.runtime.runner import Runner
 
 DEFAULT_PLANT = "default.toml"
@@ -69,6 +70,7 @@ class PlantFile:
     name: str  # what errors call it: the path, or "<default plant>"
     data: Mapping[str, object]
     base_dir: Path
+    text: str = ""  # the file as read (a recording embeds it)
 
 
 @dataclass(slots=True)
@@ -84,6 +86,9 @@ class Plant:
     bindings: list[Binding] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)  # what devices said of the file's inputs
     events: EventBus = field(default_factory=EventBus)  # what windows onto the plant observe
+    source: PlantFile | None = None  # the file it was built from (a recording embeds it)
+    recorder: Recorder | None = None  # plant.record(FILE): what enters and leaves is written
+    bound: list[tuple[str, ...]] = field(default_factory=list)  # the binder groups opened
 
     # --- devices -----------------------------------------------------------
 
@@ -138,14 +143,53 @@ class Plant:
         """Open the TES Modbus endpoints; returns one 'listening: ...' line each."""
         from fieldtwin.runtime.binder import MODBUS, bind
 
+        if self.recorder is not None and runner.tap is None:
+            runner.set_tap(self.recorder)  # recorded since before the endpoints opened
+        self.note_bound((MODBUS,))
         binding = bind(self.devices, runner, groups=(MODBUS,), events=self.events)
         self.bindings.append(binding)
         return binding.lines
+
+    def note_bound(self, groups: tuple[str, ...]) -> None:
+        """The binder is about to open ``groups`` (a recording replays that)."""
+        self.bound.append(groups)
+        if self.recorder is not None:
+            self.recorder.bound(groups)
+
+    def record(self, path: str | Path, runner: Runner | None = None) -> Recorder:
+        """Record what enters and leaves the plant into ``path`` (docs/record.md), until
+        ``plant.close()`` (or the recorder's ``close()``).  ``runner``: the one pumping
+        the plant's endpoints (default: the PLC's).  Start it before the plant runs."""
+        from fieldtwin.runtime.record import Recorder
+
+        if self.recorder is not None:
+            raise ConfigError(f"this plant is already recording into {self.recorder.path}")
+        if self.clock.now or self.clock.fired:
+            raise ConfigError(
+                f"plant.record: start the recording before the plant runs (simulated time is"
+                f" {self.clock.now / 1e6:g} s): a replay starts from the plant file at t = 0"
+            )
+        pacer = runner or (self.plc.runner if self.plc is not None else None)
+        if self.source is None:
+            raise ConfigError(
+                "plant.record: this plant was not built from a plant file (build_plant,"
+                " load_plant): a replay rebuilds the plant from its file"
+            )
+        header = recording_header(self.source, self.speed)
+        recorder = Recorder(path, header, self.clock, self.devices, self.events)
+        for groups in self.bound:
+            recorder.bound(groups)
+        if isinstance(pacer, _runner_type()):
+            pacer.set_tap(recorder)
+        self.recorder = recorder
+        self.bindings.append(_closing(recorder.close))
+        return recorder
 
     def close(self) -> None:
         for binding in self.bindings:
             binding.close()
         self.bindings.clear()
+        self.recorder = None
 
 
 def read_plant(path: str | Path | None) -> PlantFile:
@@ -171,6 +215,86 @@ def read_plant(path: str | Path | None) -> PlantFile:
     return _parse(text, str(p), p.resolve().parent)
 
 
+def _runner_type() -> type[Runner]:
+    from fieldtwin.runtime.runner import Runner
+
+    return Runner
+
+
+def _closing(close: Callable[[], None]) -> Binding:
+    from fieldtwin.runtime.binder import Binding
+
+    binding = Binding()
+    binding.add([], close)
+    return binding
+
+
+MAX_EMBEDDED_BYTES = MAX_PLANT_BYTES  # one file a plant names, embedded in a recording
+
+
+def recording_header(plant_file: PlantFile, speed: float | None) -> Header:
+    """A recording's header: the plant file's text and the files it names (docs/record.md)."""
+    from fieldtwin.runtime.record import SAMPLE_MS, Header
+
+    files: dict[str, str] = {}
+    for value in _strings(plant_file.data):
+        content = _named_file(plant_file, value)
+        if content is not None:
+            files[value] = content.decode("latin-1")
+    return Header(plant_file.name, plant_file.text, files, speed, SAMPLE_MS)
+
+
+def _strings(value: object) -> list[str]:
+    if isinstance(value, str):
+        return [value]
+    if isinstance(value, Mapping):
+        return [s for v in value.values() for s in _strings(v)]
+    if isinstance(value, list):
+        return [s for v in value for s in _strings(v)]
+    return []
+
+
+def _named_file(plant_file: PlantFile, value: str) -> bytes | None:
+    """The content of the file ``value`` names (relative to the plant file), if it does."""
+    if not value or len(value) > 4096 or "\0" in value or "://" in value:
+        return None
+    embedded = resources.files("fieldtwin").joinpath("plants", Path(value).name)
+    if plant_file.name == DEFAULT_NAME:
+        return embedded.read_bytes() if embedded.is_file() else None
+    path = plant_file.base_dir / value
+    try:
+        if path.is_file() and path.stat().st_size <= MAX_EMBEDDED_BYTES:
+            return path.read_bytes()
+    except (OSError, ValueError):
+        return None
+    if value.endswith(".pl7") and embedded.is_file():
+        return embedded.read_bytes()
+    return None
+
+
+def embedded_plant(header: Header, where: str, directory: Path) -> PlantFile:
+    """The plant a recording embeds, its files written into ``directory`` (a replay's)."""
+    plant_file = _parse(header.plant_text, f"{where}: plant {header.plant_name}", directory)
+    names: dict[str, str] = {}
+    for index, (name, content) in enumerate(sorted(header.files.items())):
+        target = directory / f"{index}-{Path(name).name or 'file'}"
+        target.write_bytes(content.encode("latin-1"))
+        names[name] = target.name
+    data = _renamed(plant_file.data, names)
+    assert isinstance(data, Mapping)
+    return PlantFile(plant_file.name, data, directory, header.plant_text)
+
+
+def _renamed(value: object, names: Mapping[str, str]) -> object:
+    if isinstance(value, str):
+        return names.get(value, value)
+    if isinstance(value, Mapping):
+        return {k: _renamed(v, names) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_renamed(v, names) for v in value]
+    return value
+
+
 def _parse(text: str, name: str, base_dir: Path) -> PlantFile:
     try:
         data = tomllib.loads(text)
@@ -184,7 +308,7 @@ def _parse(text: str, name: str, base_dir: Path) -> PlantFile:
             f"{name}: unknown top-level key(s) {', '.join(unknown)}"
             f" (allowed: {', '.join(TOP_LEVEL)})"
         )
-    return PlantFile(name, data, base_dir)
+    return PlantFile(name, data, base_dir, text)
 
 
 def build_plant(
@@ -212,7 +336,9 @@ def build_plant(
     if plc is not None:
         _initial_outputs(plc, outputs, f"{name}: plc.outputs")
         _program(plc, program_keys, plant_file)
-    return Plant(name, title, clock, plc, list(ctx.devices), speed=pace, notes=list(ctx.notes))
+    plant = Plant(name, title, clock, plc, list(ctx.devices), speed=pace, notes=list(ctx.notes))
+    plant.source = plant_file
+    return plant
 
 
 def _array(data: Mapping[str, object], key: str, name: str) -> list[object]:
@@ -267,6 +393,7 @@ def load_plant(
 
     plant = build_plant(read_plant(path), clock=clock, runner=runner, speed=speed)
     try:
+        plant.note_bound((SERIAL_LINE,))
         plant.bindings.append(
             bind(plant.devices, runner, groups=(SERIAL_LINE,), events=plant.events)
         )

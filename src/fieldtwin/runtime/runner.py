@@ -41,6 +41,7 @@ import sys
 from collections.abc import Callable, Collection
 from contextlib import suppress
 from dataclasses import dataclass
+from typing import Protocol
 
 from fieldtwin.clock import SimClock
 from fieldtwin.errors import ConfigError, TransportError
@@ -63,6 +64,16 @@ OUTPUT_BOUND = 4096
 # left alone this long, doubled on each failure up to the max, then tried again.
 ACCEPT_BACKOFF_S = 0.01
 ACCEPT_BACKOFF_MAX_S = 1.0
+
+
+class AttachTap(Protocol):
+    """Sees every attachment (a recording, fieldtwin.runtime.record): may wrap its callbacks."""
+
+    def link(
+        self, transport: Transport, on_data: DataCallback, on_close: CloseCallback | None
+    ) -> tuple[DataCallback, CloseCallback | None]: ...
+
+    def listener(self, listener: Listener, on_connect: ConnectCallback) -> ConnectCallback: ...
 
 
 def _to_stderr(message: str) -> None:
@@ -141,6 +152,7 @@ class Runner:
         self._stepping = 0  # nested runs of step/run_to: they run while paused
         self._depth = 0  # nested _run calls (a command that runs the clock)
         self._paces: list[_Pace] = []  # the pace of every run in progress, outermost first
+        self.tap: AttachTap | None = None  # a recording: sees every attachment (set_tap)
 
     # ----------------------------------------------------------------- attachments
 
@@ -151,6 +163,8 @@ class Runner:
         if transport.closed:
             raise TransportError(f"cannot attach {transport.name}: it is closed")
         self.detach(transport)
+        if self.tap is not None:
+            on_data, on_close = self.tap.link(transport, on_data, on_close)
         hooked = isinstance(transport, FdTransport)
         link = _Link(transport, on_data, on_close, transport.fileno(), hooked)
         self._links[id(transport)] = link
@@ -172,10 +186,20 @@ class Runner:
     def attach_listener(self, listener: Listener, on_connect: ConnectCallback) -> None:
         """Call ``on_connect(transport, now)`` for every accepted connection."""
         self.detach(listener)
+        if self.tap is not None:
+            on_connect = self.tap.listener(listener, on_connect)
         entry = _Accepting(listener, on_connect, listener.fileno())
         self._listeners[id(listener)] = entry
         self._by_fd[entry.fd] = entry
         self._wall.watch(entry.fd)
+
+    def set_tap(self, tap: AttachTap) -> None:
+        """From now on ``tap`` sees every attachment; those already made first, in order."""
+        self.tap = tap
+        for link in self._links.values():
+            link.on_data, link.on_close = tap.link(link.transport, link.on_data, link.on_close)
+        for entry in self._listeners.values():
+            entry.on_connect = tap.listener(entry.listener, entry.on_connect)
 
     def detach(self, transport_or_listener: Transport | Listener) -> None:
         """Stop pumping it (it stays open); unknown objects are ignored.  O(1) for a

@@ -75,4 +75,9 @@ class PtyTransport(FdTransport):
 
 def open_pty(settings: LineSettings | None = None) -> PtyTransport:
     """A new pty; give ``.peer_path`` to whoever plays the other end."""
+    from fieldtwin.transports.virtual import current  # a replay opens nothing real
+
+    wiring = current()
+    if wiring is not None:
+        return wiring.pty(settings)
     return PtyTransport(settings)

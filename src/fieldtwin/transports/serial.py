@@ -85,4 +85,9 @@ class SerialTransport(FdTransport):
 
 def open_serial(device: str, settings: LineSettings | None = None) -> SerialTransport:
     """Open ``device`` (e.g. /dev/ttyUSB0, or a pty's peer_path) with ``settings``."""
+    from fieldtwin.transports.virtual import current  # a replay opens nothing real
+
+    wiring = current()
+    if wiring is not None:
+        return wiring.serial(device, settings)
     return SerialTransport(device, settings or line_settings())

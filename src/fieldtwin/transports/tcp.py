@@ -180,6 +180,11 @@ def listen(
     host: str = "127.0.0.1", port: int = 0, max_connections: int = DEFAULT_MAX_CONNECTIONS
 ) -> TcpListener:
     """Listen on ``host:port``; port 0 picks a free port (see ``.address``)."""
+    from fieldtwin.transports.virtual import current  # a replay opens nothing real
+
+    wiring = current()
+    if wiring is not None:
+        return wiring.listener(host, port, max_connections)
     return TcpListener(host, port, max_connections)
 
 

@@ -1,0 +1,470 @@
+"""Recording a whole plant session: everything that enters it, everything it emits.
+
+``fieldtwin run --record FILE`` and ``plant.record(FILE)`` write one file
+(docs/record.md): a gzip stream of JSON lines, the first a header (format and
+version, the plant file's text and every file it names - PL7 programs, TES
+parameter stores, csv signals - the speed, the sampling period), then one
+compact JSON array per record, in the order things happened:
+
+inputs (with the simulated instant and ``fired``, how many clock events had run
+before them, so that a replay delivers them between the very same two events)::
+
+    ["bind",   t, fired, ["modbus", "scm"]]   ports opened (binder groups)
+    ["accept", t, fired, "l1"]                a connection on listener l1
+    ["data",   t, fired, "t3", "0001..."]     bytes that arrived on transport t3
+    ["close",  t, fired, "t3"]                the peer closed t3
+    ["call",   t, fired, "set_input", [...]]  a control-API command (Control method)
+    ["line",   t, fired, "advance 5"]         a console command line
+    ["ret",    t, fired]                      the command before returned here
+
+outputs (the simulated instant only; a replay must produce them identically)::
+
+    ["send",   t, "t3", "0001..."]            bytes sent on transport t3
+    ["result", t, "set_input", {...}]         what a command answered
+    ["object", t, "5", "IW5,0", 4104]         an object changed (sampled)
+    ["led",    t, "5", "ERR", "on"]           an LED changed (sampled)
+    ["chars",  t, "7", 0, "out", "48454c4c4f"] SCM characters (a block, wiretap.CharTap)
+    ["end",    t, fired]                      the recording was closed here
+
+Transports and listeners are named by the order the runner was given them
+(``t1``, ``t2``..., ``l1``...): the binder opens them in the plant file's order,
+so a replay that binds the same plant names them the same, whatever ports and
+pty paths the recording got.  Objects and LEDs are looked at (peeked, never
+read) every ``sample_ms`` of simulated time by a clock event of the recorder's
+own, which both the recording and its replay have.
+"""
+
+from __future__ import annotations
+
+import gzip
+import json
+import zlib
+from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from fieldtwin import __version__
+from fieldtwin.clock import MS, Handle, SimClock
+from fieldtwin.devices.face import Device
+from fieldtwin.devices.module import ModuleDevice, PlcObjects
+from fieldtwin.devices.tes import TesDevice
+from fieldtwin.errors import ConfigError, FieldtwinError
+from fieldtwin.runtime.events import Event, EventBus, Subscription
+from fieldtwin.runtime.runner import CloseCallback, ConnectCallback, DataCallback, Runner
+from fieldtwin.transports.base import Listener, Transport
+from fieldtwin.words import parse_word
+
+FORMAT = "fieldtwin-recording"
+VERSION = 1
+SAMPLE_MS = 100  # objects and LEDs are looked at this often (simulated ms)
+SAMPLE_PRIORITY = 1 << 30  # after every plant event of the same instant
+MAX_OBJECTS = 4096  # objects one device is looked at for
+MAX_HEADER_BYTES = 64 * 1024 * 1024  # a header line read back (plant text and its files)
+INPUTS = frozenset({"bind", "accept", "data", "close", "call", "line", "ret"})
+OUTPUTS = frozenset({"send", "result", "object", "led", "chars"})
+
+Record = list[Any]
+ORIGINAL_SEND = "_fieldtwin_unrecorded_send"  # where a recorded transport keeps its send
+
+
+@dataclass(frozen=True, slots=True)
+class Header:
+    """What a recording starts with."""
+
+    plant_name: str
+    plant_text: str
+    files: Mapping[str, str]  # a name the plant file gives -> that file's text (latin-1)
+    speed: float | None
+    sample_ms: int
+    version: int = VERSION
+    fieldtwin: str = __version__
+
+    def as_json(self) -> dict[str, object]:
+        return {
+            "format": FORMAT,
+            "version": self.version,
+            "fieldtwin": self.fieldtwin,
+            "plant": {"name": self.plant_name, "text": self.plant_text, "files": dict(self.files)},
+            "speed": self.speed,
+            "sample_ms": self.sample_ms,
+        }
+
+    @classmethod
+    def from_json(cls, data: object, where: str) -> Header:
+        if not isinstance(data, dict) or data.get("format") != FORMAT:
+            raise ConfigError(f"{where}: not a fieldtwin recording (no {FORMAT} header)")
+        version = data.get("version")
+        if version != VERSION:
+            raise ConfigError(
+                f"{where}: recording format version {version!r}; this fieldtwin reads"
+                f" version {VERSION}"
+            )
+        plant = data.get("plant")
+        speed = data.get("speed")
+        sample = data.get("sample_ms")
+        if (
+            not isinstance(plant, dict)
+            or not isinstance(plant.get("name"), str)
+            or not isinstance(plant.get("text"), str)
+            or not isinstance(plant.get("files"), dict)
+            or not (speed is None or isinstance(speed, int | float))
+            or not isinstance(sample, int)
+            or sample < 1
+        ):
+            raise ConfigError(f"{where}: the header is damaged (plant, speed or sample_ms)")
+        files = {str(k): str(v) for k, v in plant["files"].items()}
+        return cls(
+            plant["name"],
+            plant["text"],
+            files,
+            None if speed is None else float(speed),
+            sample,
+            version,
+            str(data.get("fieldtwin", "?")),
+        )
+
+
+class Keys:
+    """Names of transports and listeners in the order they are attached (t1.., l1..)."""
+
+    def __init__(self) -> None:
+        self._links = 0
+        self._listeners = 0
+
+    def link(self) -> str:
+        self._links += 1
+        return f"t{self._links}"
+
+    def listener(self) -> str:
+        self._listeners += 1
+        return f"l{self._listeners}"
+
+
+# ------------------------------------------------------------------------- the file
+
+
+class RecordWriter:
+    """A gzip file of JSON lines: the header, then the records."""
+
+    def __init__(self, path: str | Path, header: Header) -> None:
+        self.path = Path(path)
+        try:
+            self._file: gzip.GzipFile | None = gzip.GzipFile(self.path, "wb", compresslevel=6)
+        except OSError as exc:
+            raise ConfigError(f"--record {path}: cannot write ({exc.strerror})") from None
+        self.records = 0
+        self._write(header.as_json())
+
+    def _write(self, item: object) -> None:
+        assert self._file is not None
+        line = json.dumps(item, separators=(",", ":"), ensure_ascii=False, default=str)
+        self._file.write(line.encode("utf-8") + b"\n")
+
+    def add(self, record: Record) -> None:
+        if self._file is not None:
+            self._write(record)
+            self.records += 1
+
+    def close(self) -> None:
+        if self._file is not None:
+            file, self._file = self._file, None
+            file.close()
+
+
+def read_recording(path: str | Path) -> tuple[Header, list[Record]]:
+    """The header and the records of a recording; errors name the file and the line."""
+    return read_header(path), list(iter_records(path))
+
+
+def read_header(path: str | Path) -> Header:
+    where = str(path)
+    with _reading(where), gzip.open(path, "rb") as file:
+        return Header.from_json(_json(file.readline(MAX_HEADER_BYTES), where, 1), where)
+
+
+def iter_records(path: str | Path, kinds: Collection[str] | None = None) -> Iterator[Record]:
+    """The records after the header, one at a time (of ``kinds`` only, when given): a
+    recording of hours is never held in memory whole."""
+    where = str(path)
+    with _reading(where), gzip.open(path, "rb") as file:
+        file.readline(MAX_HEADER_BYTES)
+        for number, line in enumerate(file, start=2):
+            item = _json(line, where, number)
+            if not isinstance(item, list) or not item or not isinstance(item[0], str):
+                raise ConfigError(f"{where}: line {number}: not a record")
+            if item[0] not in INPUTS and item[0] not in OUTPUTS and item[0] != "end":
+                raise ConfigError(f"{where}: line {number}: unknown record {item[0]!r}")
+            if kinds is None or item[0] in kinds:
+                yield item
+
+
+@contextmanager
+def _reading(where: str) -> Iterator[None]:
+    try:
+        yield
+    except (OSError, zlib.error) as exc:  # gzip.BadGzipFile is an OSError
+        raise ConfigError(f"{where}: cannot read the recording ({exc})") from None
+    except EOFError:
+        raise ConfigError(f"{where}: the recording is cut short (not closed?)") from None
+
+
+def _json(line: bytes, where: str, number: int) -> object:
+    try:
+        return json.loads(line)
+    except (json.JSONDecodeError, UnicodeDecodeError):
+        raise ConfigError(f"{where}: line {number}: not JSON (damaged recording)") from None
+
+
+# ------------------------------------------------------------------------- sampling
+
+
+class Sampler:
+    """Objects and LEDs of the devices, peeked every ``period_us``; changes to ``emit``."""
+
+    def __init__(
+        self,
+        clock: SimClock,
+        devices: Sequence[Device],
+        emit: Callable[[Record], None],
+        period_us: int,
+    ) -> None:
+        self.clock = clock
+        self.devices = list(devices)
+        self.emit = emit
+        self.period_us = period_us
+        self._seen: dict[tuple[str, str, str], object] = {}
+        self._names: dict[int, list[tuple[str, Callable[[], object]]]] = {}
+        self._timer: Handle | None = clock.schedule(clock.now, self._sample, SAMPLE_PRIORITY)
+
+    def _sample(self, now: int) -> None:
+        self.look(now)
+        self._timer = self.clock.schedule(now + self.period_us, self._sample, SAMPLE_PRIORITY)
+
+    def look(self, now: int) -> None:
+        for device in self.devices:
+            address = str(device.address)
+            for name, state in device.status().leds:
+                self._change(now, "led", address, name, str(state))
+            for name, peek in self._peekers(device):
+                try:
+                    value: object = peek()
+                except FieldtwinError:
+                    value = None  # a module out of its slot, a word its model lacks
+                self._change(now, "object", address, name, value)
+
+    def _peekers(self, device: Device) -> list[tuple[str, Callable[[], object]]]:
+        """(name, peek) of every object of ``device``, made once (a TES word by its
+        number: no name to parse on every look)."""
+        found = self._names.get(id(device))
+        if found is not None:
+            return found
+        objects = device.objects()
+        names = [entry.split()[0] for entry in objects.names()[:MAX_OBJECTS]]
+        if isinstance(device, TesDevice):
+            tes = device.tes
+            found = [(name, _bind(tes.peek, parse_word(name))) for name in names]
+        elif isinstance(device, ModuleDevice) and isinstance(objects, PlcObjects):
+            # the module's own PL7 objects (its names): the PLC reads them, no side effect
+            found = [(name, _bind(device.plc.read, name)) for name in names]
+        else:
+            found = [(name, _bind(objects.peek, name)) for name in names]
+        self._names[id(device)] = found
+        return found
+
+    def _change(self, now: int, kind: str, address: str, name: str, value: object) -> None:
+        key = (kind, address, name)
+        if key in self._seen and self._seen[key] == value:
+            return
+        self._seen[key] = value
+        self.emit([kind, now, address, name, value])
+
+    def close(self) -> None:
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+
+
+def _bind(peek: Callable[[Any], int], name: object) -> Callable[[], object]:
+    return lambda: peek(name)
+
+
+def chars_record(event: Event) -> Record:
+    data = event.data
+    return ["chars", event.t_us, event.device, data.get("channel"), data.get("dir"), data["hex"]]
+
+
+class CharsFeed:
+    """SCM character blocks published on the plant's bus, as records (on the sim thread)."""
+
+    def __init__(self, bus: EventBus, emit: Callable[[Record], None]) -> None:
+        self._emit = emit
+        self._sub: Subscription | None = bus.subscribe(kinds=("serial",), notify=self._take)
+
+    def _take(self) -> None:
+        if self._sub is not None:
+            for event in self._sub.take():
+                self._emit(chars_record(event))
+
+    def close(self) -> None:
+        if self._sub is not None:
+            self._take()
+            self._sub.close()
+            self._sub = None
+
+
+# ------------------------------------------------------------------------- the recorder
+
+
+class Recorder:
+    """Writes what enters and leaves one plant (see the module docstring).
+
+    Install it before any port opens (``runner.set_tap(recorder)`` wraps those
+    already attached, in order); ``close()`` writes the end record and the file.
+    """
+
+    def __init__(
+        self,
+        path: str | Path,
+        header: Header,
+        clock: SimClock,
+        devices: Sequence[Device],
+        bus: EventBus,
+        runner: Runner | None = None,
+    ) -> None:
+        self.clock = clock
+        self.writer = RecordWriter(path, header)
+        self.keys = Keys()
+        self._depth = 0  # inside a recorded command: its inner calls are its own
+        self.closed = False
+        self._chars = CharsFeed(bus, self.writer.add)
+        self._sampler = Sampler(clock, devices, self.writer.add, header.sample_ms * MS)
+        if runner is not None:
+            runner.set_tap(self)
+
+    @property
+    def path(self) -> Path:
+        return self.writer.path
+
+    def _input(self, kind: str, *fields: object) -> None:
+        self.writer.add([kind, self.clock.now, self.clock.fired, *fields])
+
+    # --- what the runner is given (fieldtwin.runtime.runner.AttachTap) --------------
+
+    def link(
+        self, transport: Transport, on_data: DataCallback, on_close: CloseCallback | None
+    ) -> tuple[DataCallback, CloseCallback | None]:
+        key = self.keys.link()
+        # the instance's own send, wrapped once (attached again: the first send, a new key)
+        send: Callable[[bytes], None] = getattr(transport, ORIGINAL_SEND, transport.send)
+
+        def sending(data: bytes) -> None:
+            self.writer.add(["send", self.clock.now, key, bytes(data).hex()])
+            send(data)
+
+        setattr(transport, ORIGINAL_SEND, send)
+        setattr(transport, "send", sending)  # noqa: B010
+
+        def arrived(data: bytes, now: int) -> None:
+            self._input("data", key, data.hex())
+            on_data(data, now)
+
+        def closed(now: int) -> None:
+            self._input("close", key)
+            if on_close is not None:
+                on_close(now)
+
+        return arrived, closed
+
+    def listener(self, listener: Listener, on_connect: ConnectCallback) -> ConnectCallback:
+        key = self.keys.listener()
+
+        def connected(transport: Transport, now: int) -> None:
+            self._input("accept", key)
+            on_connect(transport, now)
+
+        return connected
+
+    # --- what the binder, the console and the control API tell ----------------------
+
+    def bound(self, groups: Sequence[str]) -> None:
+        self._input("bind", sorted(groups))
+
+    def command(self, kind: str, name: str, args: Sequence[object], run: Callable[[], Any]) -> Any:
+        """Run a command (a console line, a control call), recording it and its answer."""
+        if self._depth or self.closed:
+            return run()
+        self._input(kind, *([name] if kind == "line" else [name, list(args)]))
+        label = "console" if kind == "line" else name
+        self._depth += 1
+        try:
+            result = run()
+        except FieldtwinError as exc:
+            self._depth -= 1
+            self._input("ret")
+            self.writer.add(["result", self.clock.now, label, {"error": str(exc)}])
+            raise
+        except BaseException:
+            self._depth -= 1
+            raise
+        self._depth -= 1
+        self._input("ret")
+        self.writer.add(["result", self.clock.now, label, plain_json(result)])
+        return result
+
+    def instrument(self, target: object, names: Sequence[str]) -> None:
+        """Record every call of ``target``'s methods ``names`` (the control API's Control)."""
+        for name in names:
+            method = getattr(target, name)
+            setattr(target, name, self._recorded(name, method))
+
+    def _recorded(self, name: str, method: Callable[..., Any]) -> Callable[..., Any]:
+        def call(*args: object) -> Any:
+            return self.command("call", name, args, lambda: method(*args))
+
+        return call
+
+    def close(self) -> None:
+        """The end record; the file closed (flushed).  Safe to call twice."""
+        if self.closed:
+            return
+        self.closed = True
+        self._chars.close()
+        self._sampler.close()
+        self.writer.add(["end", self.clock.now, self.clock.fired])
+        self.writer.close()
+
+
+def plain_json(value: object) -> object:
+    """A command's answer as JSON would give it back (tuples become lists)."""
+    result: object = json.loads(json.dumps(value, default=str))
+    return result
+
+
+def inputs_and_outputs(records: Sequence[Record]) -> tuple[list[Record], list[Record]]:
+    ins = [r for r in records if r[0] in INPUTS]
+    outs = [r for r in records if r[0] in OUTPUTS]
+    return ins, outs
+
+
+def iter_outputs(records: Sequence[Record]) -> Iterator[Record]:
+    return (r for r in records if r[0] in OUTPUTS)
+
+
+__all__ = [
+    "FORMAT",
+    "SAMPLE_MS",
+    "VERSION",
+    "Header",
+    "Keys",
+    "RecordWriter",
+    "Recorder",
+    "Sampler",
+    "chars_record",
+    "inputs_and_outputs",
+    "iter_records",
+    "plain_json",
+    "read_header",
+    "read_recording",
+]

@@ -1,0 +1,178 @@
+"""Virtual endpoints: what a replay opens instead of ptys, serial ports and TCP listeners.
+
+``fieldtwin replay`` rebuilds a recorded plant and binds its ports as the
+recording did, but nothing real may be opened (no port to collide with, no
+device to be missing on another machine).  While a ``Wiring`` is in force
+(``with wiring:``), ``listen``, ``open_pty`` and ``open_serial`` return the
+virtual twins below: they are real transports in everything the plant sees
+(``is_real`` stays True, so an RTU line keeps the relaxed timing of a real
+line), but they have no descriptor, never receive, and hand what is sent to
+the wiring's ``sink`` with the transport's key.  The replay runner
+(fieldtwin.runtime.replay) delivers the recorded input bytes itself.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from contextvars import ContextVar, Token
+from types import TracebackType
+
+from fieldtwin.transports.base import LineSettings, line_settings
+from fieldtwin.transports.pty import PtyTransport
+from fieldtwin.transports.serial import SerialTransport
+from fieldtwin.transports.tcp import DEFAULT_MAX_CONNECTIONS, TcpListener, TcpTransport
+
+Sink = Callable[[str, bytes], None]  # (transport key, bytes sent)
+
+_CURRENT: ContextVar[Wiring | None] = ContextVar("fieldtwin_virtual_wiring", default=None)
+
+
+def current() -> Wiring | None:
+    """The wiring in force (None: open real endpoints)."""
+    return _CURRENT.get()
+
+
+class _Sending:
+    """What every virtual transport shares: a key given by the runner, a sink."""
+
+    key: str = "?"
+    sink: Sink | None = None
+
+    def _emit(self, data: bytes) -> int:
+        if self.sink is not None:
+            self.sink(self.key, bytes(data))
+        return len(data)
+
+
+class VirtualPty(_Sending, PtyTransport):
+    def __init__(self, number: int, settings: LineSettings | None) -> None:
+        super(PtyTransport, self).__init__(f"pty:virtual/{number}")
+        self.settings = settings or line_settings()
+        self.peer_path = f"virtual/{number}"
+
+    def _write(self, data: bytes) -> int:
+        return self._emit(data)
+
+    def receive(self) -> bytes:
+        self._check_open("receive")
+        return b""
+
+    def fileno(self) -> int | None:
+        return None
+
+    def _release(self) -> None:
+        pass
+
+
+class VirtualSerial(_Sending, SerialTransport):
+    _port = None  # type: ignore[assignment]  # no pyserial object: never follows a format
+
+    def __init__(self, device: str, settings: LineSettings | None) -> None:
+        super(SerialTransport, self).__init__(f"serial:{device}")
+        self.settings = settings or line_settings()
+        self.peer_path = device
+
+    def _write(self, data: bytes) -> int:
+        return self._emit(data)
+
+    def receive(self) -> bytes:
+        self._check_open("receive")
+        return b""
+
+    def fileno(self) -> int | None:
+        return None
+
+    def _release(self) -> None:
+        pass
+
+
+class VirtualConnection(_Sending, TcpTransport):
+    """A connection a replay hands to a virtual listener's ``on_connect``."""
+
+    def __init__(self, name: str) -> None:
+        super(TcpTransport, self).__init__(name)
+        self._on_release = None
+
+    def _write(self, data: bytes) -> int:
+        return self._emit(data)
+
+    def receive(self) -> bytes:
+        self._check_open("receive")
+        return b""
+
+    def fileno(self) -> int | None:
+        return None
+
+    def _release(self) -> None:
+        pass
+
+
+class VirtualListener(TcpListener):
+    """A listener nobody can reach: the replay makes its connections."""
+
+    def __init__(self, host: str, port: int) -> None:
+        self.name = f"tcp://{host}:{port}"
+        self.address = (host, port)
+        self.closed = False
+        self.live = 0
+        self.accepted = 0
+
+    def accept(self) -> TcpTransport | None:
+        return None
+
+    def connection(self) -> VirtualConnection:
+        self.accepted += 1
+        return VirtualConnection(f"{self.name} <- virtual:{self.accepted}")
+
+    def fileno(self) -> int:
+        return -1
+
+    def close(self) -> None:
+        self.closed = True
+
+
+class Wiring:
+    """``with Wiring(sink):`` every endpoint opened inside is virtual."""
+
+    def __init__(self, sink: Sink | None = None) -> None:
+        self.sink = sink
+        self._count = 0
+        self._token: Token[Wiring | None] | None = None
+
+    def __enter__(self) -> Wiring:
+        self._token = _CURRENT.set(self)
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        if self._token is not None:
+            _CURRENT.reset(self._token)
+            self._token = None
+
+    def _number(self) -> int:
+        self._count += 1
+        return self._count
+
+    def listener(self, host: str, port: int, max_connections: int) -> VirtualListener:
+        return VirtualListener(host, port)
+
+    def pty(self, settings: LineSettings | None) -> VirtualPty:
+        return VirtualPty(self._number(), settings)
+
+    def serial(self, device: str, settings: LineSettings | None) -> VirtualSerial:
+        return VirtualSerial(device, settings)
+
+
+__all__ = [
+    "DEFAULT_MAX_CONNECTIONS",
+    "VirtualConnection",
+    "VirtualListener",
+    "VirtualPty",
+    "VirtualSerial",
+    "Wiring",
+    "current",
+]
