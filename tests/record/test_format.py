@@ -194,3 +194,17 @@ def test_the_streamed_comparison_counts_every_record_and_keeps_only_the_context(
     assert found.text.count("same ") == 3  # the context before it, not the 500
     assert "- recorded t = 0.000500 s  send t1  00" in found.text
     assert "+ replayed t = 0.000500 s  send t1  ff" in found.text
+
+
+def test_dem_messages_are_recorded_and_replayed(tmp_path: Path) -> None:
+    plant = load_plant(None, speed=None)  # the default plant: its DEM logs from t = 60 s on
+    record = tmp_path / "dem.ftrec"
+    plant.record(record)
+    Console(plant).execute("advance 70")
+    plant.close()
+    _, records = read_recording(record)
+    dem = [r for r in records if r[0] == "dem"]
+    assert dem and all(r[2] == "4" and r[3].startswith("1994-07-15 18:06:") for r in dem)
+    assert {r[4] for r in dem} <= {"change", "overall"}
+    outcome = replay(record)
+    assert outcome.identical, outcome.difference

@@ -24,6 +24,9 @@ outputs (the simulated instant only; a replay must produce them identically)::
     ["object", t, "5", "IW5,0", 4104]         an object changed (sampled)
     ["led",    t, "5", "ERR", "on"]           an LED changed (sampled)
     ["chars",  t, "7", 0, "out", "48454c4c4f"] SCM characters (a block, wiretap.CharTap)
+    ["dem",    t, "4", "1994-07-15 18:06:45.000", "change", 0, 1, true]
+                                              a DEM message logged (stamp, type, channel,
+                                              state or words, stored)
     ["end",    t, fired]                      the recording was closed here
 
 Transports and listeners are named by the order the runner was given them
@@ -63,7 +66,7 @@ SAMPLE_PRIORITY = 1 << 30  # after every plant event of the same instant
 MAX_OBJECTS = 4096  # objects one device is looked at for
 MAX_HEADER_BYTES = 64 * 1024 * 1024  # a header line read back (plant text and its files)
 INPUTS = frozenset({"bind", "accept", "data", "close", "call", "line", "ret"})
-OUTPUTS = frozenset({"send", "result", "object", "led", "chars"})
+OUTPUTS = frozenset({"send", "result", "object", "led", "chars", "dem"})
 
 Record = list[Any]
 ORIGINAL_SEND = "_fieldtwin_unrecorded_send"  # where a recorded transport keeps its send
@@ -292,15 +295,19 @@ def _bind(peek: Callable[[Any], int], name: object) -> Callable[[], object]:
 
 def chars_record(event: Event) -> Record:
     data = event.data
+    if event.kind == "dem":  # a message a DEM logged (runtime.binder's logbook tap)
+        what = [data["channel"], data["state"]] if data["type"] == "change" else [data["words"]]
+        return ["dem", event.t_us, event.device, data["stamp"], data["type"], *what, data["stored"]]
     return ["chars", event.t_us, event.device, data.get("channel"), data.get("dir"), data["hex"]]
 
 
 class CharsFeed:
-    """SCM character blocks published on the plant's bus, as records (on the sim thread)."""
+    """SCM character blocks and DEM messages published on the plant's bus, as records
+    (on the simulation's thread)."""
 
     def __init__(self, bus: EventBus, emit: Callable[[Record], None]) -> None:
         self._emit = emit
-        self._sub: Subscription | None = bus.subscribe(kinds=("serial",), notify=self._take)
+        self._sub: Subscription | None = bus.subscribe(kinds=("serial", "dem"), notify=self._take)
 
     def _take(self) -> None:
         if self._sub is not None:

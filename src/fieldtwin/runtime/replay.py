@@ -238,6 +238,10 @@ def show(record: Record | None) -> str:
         return f"t = {t_us / 1e6:.6f} s  chars {rest[0]} channel {rest[1]} {rest[2]}  {text!r}"
     if kind in ("object", "led"):
         return f"t = {t_us / 1e6:.6f} s  {kind} {rest[0]} {rest[1]} = {rest[2]}"
+    if kind == "dem":
+        body = " ".join(str(r) for r in rest[3:-1])
+        lost = "" if rest[-1] else " (lost: stack full)"
+        return f"t = {t_us / 1e6:.6f} s  dem {rest[0]} {rest[2]} {body} at {rest[1]}{lost}"
     if kind == "result":
         return f"t = {t_us / 1e6:.6f} s  result of {rest[0]}: {json.dumps(rest[1])[:200]}"
     at = f"t = {t_us / 1e6:.6f} s"
