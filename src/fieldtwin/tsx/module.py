@@ -54,6 +54,25 @@ ST_RUN = 0xC  # module Run (0 = Stop)
 CMD_RESET_EXCHANGE = 0x2  # message-system reset
 CMD_RUN = 0xC  # module Run/Stop
 
+PRUNE_MIN = 32  # handles kept before the fired ones are dropped from the list
+BusListener = Callable[["IntelligentModule"], None]
+
+
+class InputWords(list[int]):
+    """IWxy,0..7 as the module writes them: a list that tells its module of every
+    write, so that the PLC reads the bus face of a module only after it changed
+    (DESIGN rule 3: an idle module costs nothing at the bus refresh)."""
+
+    __slots__ = ("_changed",)
+
+    def __init__(self, values: list[int], changed: Callable[[], None]) -> None:
+        super().__init__(values)
+        self._changed = changed
+
+    def __setitem__(self, key: Any, value: Any) -> None:
+        list.__setitem__(self, key, value)
+        self._changed()
+
 
 class IntelligentModule:
     """Base of every intelligent module twin; subclasses add their function."""
@@ -86,17 +105,54 @@ class IntelligentModule:
         self._mode: Machine[ModuleState, ModuleEvent, IntelligentModule] = Machine(
             MODES, ModuleState.OFF, self
         )
-        self.iw = [0] * 8  # written by the module, read by the PLC
+        # The bus face (IWxy,i, Ixy,i, Ixy,S) changed since the PLC last read it: set
+        # by every write of iw or i_bits, every change of mode or fault; the PLC's
+        # listener is told once, when the flag goes up (Plc.insert sets it).
+        self.bus_dirty = True
+        self.bus_listener: BusListener | None = None
+        self._iw = InputWords([0] * 8, self.bus_changed)  # written by the module
+        self._i_bits = 0
         self.ow = [0] * 8  # written by the PLC
-        self.i_bits = 0
         self.o_bits = 0
         self.awaiting_configuration = False
         self.app_name = b""
-        self._faults = FaultLatches()
+        self._faults = FaultLatches(self.bus_changed)
         self.exchanges = Exchanges(self)  # the message interface (AEM 2.4-4)
-        self._handles: list[ClockHandle] = []
+        self._handles: list[ClockHandle] = []  # what a power-off cancels
+        self._prune_at = PRUNE_MIN
         self._self_test: ClockHandle | None = None
         self._hardware_faults: set[int] = set()  # found by the next initial self-test
+
+    # --- the bus face: what the PLC reads --------------------------------------
+
+    @property
+    def iw(self) -> list[int]:
+        """The input words IWxy,0..7 (the PLC reads them at its bus refresh)."""
+        return self._iw
+
+    @iw.setter
+    def iw(self, values: list[int]) -> None:
+        self._iw = InputWords(list(values), self.bus_changed)
+        self.bus_changed()
+
+    @property
+    def i_bits(self) -> int:
+        """The discrete input bits Ixy,0..F."""
+        return self._i_bits
+
+    @i_bits.setter
+    def i_bits(self, value: int) -> None:
+        if value != self._i_bits:
+            self._i_bits = value
+            self.bus_changed()
+
+    def bus_changed(self) -> None:
+        """Something the PLC reads may have changed: it reads this module again."""
+        if not self.bus_dirty:
+            self.bus_dirty = True
+            listener = self.bus_listener
+            if listener is not None:
+                listener(self)
 
     # --- identity ---------------------------------------------------------
 
@@ -115,8 +171,11 @@ class IntelligentModule:
 
     def call_later(self, delay: int, callback: Callable[[int], None]) -> ClockHandle:
         handle = self.clock.call_later(delay, callback)
-        self._handles = [h for h in self._handles if h.active]
-        self._handles.append(handle)
+        handles = self._handles
+        handles.append(handle)
+        if len(handles) > self._prune_at:  # fired and cancelled handles go, in bulk
+            self._handles = handles = [h for h in handles if h.active]
+            self._prune_at = max(PRUNE_MIN, 2 * len(handles))
         return handle
 
     def call_at(self, at: int, callback: Callable[[int], None]) -> ClockHandle:
@@ -136,6 +195,7 @@ class IntelligentModule:
                 f" in state {self.state.value}"
             )
         self._mode.fire(event, now)
+        self.bus_changed()
         self.refresh_status()
 
     def power_on(self, now: int | None = None) -> None:
@@ -320,9 +380,10 @@ class IntelligentModule:
     @property
     def module_fault(self) -> bool:
         """Ixy,S: blocking or module fault, wrong declared code (AEM 4.4-1)."""
-        if self.state is ModuleState.OFF or not self.code_ok:
+        state = self._mode.state
+        if state is ModuleState.OFF or state is ModuleState.BLOCKED:
             return True
-        if self.state is ModuleState.BLOCKED:
+        if self.declared_code is not None and not self.code_ok:
             return True
         return self._any(FaultCategory.MODULE, memorised=False)
 
@@ -396,7 +457,7 @@ class IntelligentModule:
         self.refresh_status()
 
     def bus_read(self) -> BusImage:
-        return BusImage(tuple(self.iw), self.i_bits, self.module_fault)
+        return BusImage(tuple(self._iw), self._i_bits, self.module_fault)
 
     # --- the message interface (the Exchanges component, tsx/messages.py) -----
 
