@@ -170,16 +170,18 @@ class IntelligentModule:
     # --- scheduling that power-off cancels -------------------------------
 
     def call_later(self, delay: int, callback: Callable[[int], None]) -> ClockHandle:
-        handle = self.clock.call_later(delay, callback)
+        return self.call_at(self.clock.now + delay, callback)
+
+    def call_at(self, at: int, callback: Callable[[int], None]) -> ClockHandle:
+        if at < self.clock.now:
+            raise ConfigError(f"delay must be >= 0 us, got {at - self.clock.now}")
+        handle = self.clock.schedule(at, callback)
         handles = self._handles
         handles.append(handle)
         if len(handles) > self._prune_at:  # fired and cancelled handles go, in bulk
             self._handles = handles = [h for h in handles if h.active]
             self._prune_at = max(PRUNE_MIN, 2 * len(handles))
         return handle
-
-    def call_at(self, at: int, callback: Callable[[int], None]) -> ClockHandle:
-        return self.call_later(at - self.clock.now, callback)
 
     # --- the operating-mode machine (DESIGN rule 4: the MODES table below) --
 

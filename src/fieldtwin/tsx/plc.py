@@ -156,8 +156,9 @@ class Plc:
         self._slots: dict[tuple[int, int], _Slot] = {}
         # The bus refresh (see _end_of_task): event-driven, a slot is refreshed only
         # after its module's bus face changed (module.bus_dirty) or the PLC's output
-        # image may have changed; else every slot at every task, as the real PLC
-        # does (kept for the benchmarks' baseline and the equivalence tests).
+        # image may have changed, and a program's idle tasks are skipped (pl7/watch.py);
+        # else every slot and the whole program at every task, as the real PLC does
+        # (kept for the benchmarks' baseline and the equivalence tests).
         self.event_driven = event_driven
         self._bus_pending = False  # a module's face changed since the last refresh
         self._outputs_touched = False  # outputs written from outside the program
@@ -328,17 +329,21 @@ class Plc:
             return
         self.cycles += 1
         program = self.program
+        wrote = program is not None  # the program may have written the output image
         if program is not None and self.running:  # PRE, CHART, POST on the input image
             if self.calendar_epoch_s is not None:
                 for word, value in calendar_words(self.calendar_epoch_s + now // S).items():
                     self.sw[word] = value
+            skipped = program.skipped
+            program.skip_idle = self.event_driven  # else every task runs, as on the PLC
             program.run_master_task(now)
+            wrote = program.skipped == skipped  # a skipped task wrote nothing
         registers = self.cycles % self.model.register_every == 0
         if not self.event_driven:
             for entry in self._slots.values():
                 self._refresh(entry, registers, now)
-        elif program is not None or self._outputs_touched or self._bus_pending:
-            self._refresh_changed(program is not None, registers, now)
+        elif wrote or self._outputs_touched or self._bus_pending:
+            self._refresh_changed(wrote, registers, now)
         self.txt.end_of_task(now, self.running)
 
     def _refresh_changed(self, outputs: bool, registers: bool, now: int) -> None:
