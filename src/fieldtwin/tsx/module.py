@@ -318,7 +318,7 @@ class IntelligentModule:
 
     @property
     def running(self) -> bool:
-        return bool(get_bit(self.iw[0], ST_RUN))
+        return bool(self._iw[0] >> ST_RUN & 1)
 
     def _compute_run(self) -> bool:
         if self.state is not ModuleState.OPERATIONAL or not self.code_ok:
@@ -327,7 +327,7 @@ class IntelligentModule:
             return False
         if self._faults.any(FaultCategory.MODULE, memorised=False):
             return False  # AEM 2.5-4: module to Stop until the fault disappears
-        return bool(get_bit(self.ow[0], CMD_RUN)) and self.run_permitted()
+        return bool(self.ow[0] >> CMD_RUN & 1) and self.run_permitted()
 
     # --- faults (AEM 4.4-1) ------------------------------------------------
 
@@ -417,23 +417,25 @@ class IntelligentModule:
 
     def standard_status(self) -> int:
         word = self.iw[0] & ~0x1FFC & 0xFFFF  # keep bits a subclass owns (0, 1, D..F)
-        if self.state is ModuleState.OFF:
+        state = self._mode.state
+        if state is ModuleState.OFF:
             return 0
         module = self._any(FaultCategory.MODULE, memorised=True)
         application = self._any(FaultCategory.APPLICATION, memorised=True)
-        word = set_bit(word, ST_RESET_DONE, get_bit(self.ow[0], CMD_RESET_EXCHANGE))
-        word = set_bit(word, ST_READY, self.state is ModuleState.OPERATIONAL)
-        word = set_bit(word, ST_MODULE_FAULT, module)
-        word = set_bit(word, ST_APPLICATION_FAULT, application)
-        word = set_bit(word, ST_GENERAL_FAULT, module or application)
+        # bits 2..C are clear in ``word``: each is OR-ed in once
+        word |= ((self.ow[0] >> CMD_RESET_EXCHANGE) & 1) << ST_RESET_DONE
+        word |= (state is ModuleState.OPERATIONAL) << ST_READY
+        word |= bool(module) << ST_MODULE_FAULT
+        word |= bool(application) << ST_APPLICATION_FAULT
+        word |= bool(module or application) << ST_GENERAL_FAULT
         # AEM 4.4-1: "Blocking fault, or module absent or incorrectly coded"
-        blocked = self.state is ModuleState.BLOCKED or not self.code_ok
-        word = set_bit(word, ST_BLOCKING_FAULT, blocked)
-        word = set_bit(word, ST_SELF_TEST, self.state is ModuleState.SELF_TEST)
+        blocked = state is ModuleState.BLOCKED or not self.code_ok
+        word |= blocked << ST_BLOCKING_FAULT
+        word |= (state is ModuleState.SELF_TEST) << ST_SELF_TEST
         tb = self.terminal_block_fault_bit
-        word = set_bit(word, ST_TERMINAL_BLOCK, tb is not None and self.fault_active(tb))
-        word = set_bit(word, ST_AWAITING_CONFIG, self.awaiting_configuration)
-        return set_bit(word, ST_RUN, self._compute_run())
+        word |= (tb is not None and self.fault_active(tb)) << ST_TERMINAL_BLOCK
+        word |= bool(self.awaiting_configuration) << ST_AWAITING_CONFIG
+        return word | bool(self._compute_run()) << ST_RUN
 
     def refresh_status(self) -> None:
         """Recompute IWxy,0; call after anything that may change it."""
@@ -441,7 +443,9 @@ class IntelligentModule:
             self.iw[0] = 0
             return
         was_running = self.running
-        self.iw[0] = self.standard_status()
+        word = self.standard_status()
+        if self._iw[0] != word:  # an unchanged word is not written: no new bus read
+            self._iw[0] = word
         if self.running != was_running:
             self.on_run_changed(self.running, self.clock.now)
 

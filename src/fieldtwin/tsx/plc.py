@@ -162,6 +162,7 @@ class Plc:
         self.event_driven = event_driven
         self._bus_pending = False  # a module's face changed since the last refresh
         self._outputs_touched = False  # outputs written from outside the program
+        self._calendar_words: tuple[int, list[tuple[int, int]]] = (-1, [])
         self._scan: Handle | None = self.clock.call_later(self.scan_us, self._end_of_task)
 
     # --- racks and slots -------------------------------------------------------
@@ -332,7 +333,7 @@ class Plc:
         wrote = program is not None  # the program may have written the output image
         if program is not None and self.running:  # PRE, CHART, POST on the input image
             if self.calendar_epoch_s is not None:
-                for word, value in calendar_words(self.calendar_epoch_s + now // S).items():
+                for word, value in self._calendar(self.calendar_epoch_s + now // S):
                     self.sw[word] = value
             skipped = program.skipped
             program.skip_idle = self.event_driven  # else every task runs, as on the PLC
@@ -345,6 +346,12 @@ class Plc:
         elif wrote or self._outputs_touched or self._bus_pending:
             self._refresh_changed(wrote, registers, now)
         self.txt.end_of_task(now, self.running)
+
+    def _calendar(self, epoch_s: int) -> list[tuple[int, int]]:
+        """SW51..SW56 of ``epoch_s``, computed once a second (written at every task)."""
+        if self._calendar_words[0] != epoch_s:
+            self._calendar_words = (epoch_s, list(calendar_words(epoch_s).items()))
+        return self._calendar_words[1]
 
     def _refresh_changed(self, outputs: bool, registers: bool, now: int) -> None:
         """The event-driven bus refresh, with the same result as ``_refresh`` on every
