@@ -36,7 +36,7 @@ from fieldtwin.tsx.textblock import (
     Exchange,
     Request,
 )
-from fieldtwin.words import get_bit, set_bit
+from fieldtwin.words import get_bit
 
 # IWxy,0 standard status word (AEM 4.4-1 and the quick reference)
 ST_RESET_DONE = 0x2  # ongoing exchange cancelled, follows OWxy,0,2
