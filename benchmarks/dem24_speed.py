@@ -62,6 +62,7 @@ def main() -> None:
     cpu0, wall0, messages0 = run(False)
     assert messages == messages0, "the two refreshes logged differently"
     print(f"edges per CPU second: {cpu:,.0f} against {cpu0:,.0f} ({cpu / cpu0:.2f}x)")
+    print(f"edges per wall second: {wall:,.0f} against {wall0:,.0f} ({wall / wall0:.2f}x)")
 
 
 if __name__ == "__main__":

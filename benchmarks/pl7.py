@@ -100,7 +100,7 @@ def on_the_plc(name: str, plant_file: Path | None, seconds: float) -> None:
             figures.append((ran / elapsed, seconds / elapsed, plc.program.skipped - skipped, ran))
         finally:
             plant.close()
-    (rate, factor, skipped, ran), (rate0, factor0, _, _) = figures
+    (rate, factor, skipped, ran), (_, factor0, _, _) = figures
     print(
         f"{name:<28} {rate:>10,.0f} master tasks/s  ({factor:,.0f} x real time, {skipped}"
         f" of {ran} tasks skipped; full: {factor0:,.0f} x, gain {factor / factor0:.2f})"
