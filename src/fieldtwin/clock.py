@@ -10,7 +10,7 @@ from __future__ import annotations
 import heapq
 import itertools
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from typing import Any
 
 from fieldtwin.errors import ConfigError
 
@@ -26,33 +26,38 @@ def seconds(value: float) -> int:
     return round(value * S)
 
 
-@dataclass(order=True, slots=True)
-class _Entry:
-    time: int
-    priority: int
-    seq: int
-    callback: Callback = field(compare=False)
-    cancelled: bool = field(default=False, compare=False)
+# A heap entry is a list [time, priority, seq, callback]: lists compare in C, element
+# by element, and seq is unique, so the callback is never compared.  A fired or
+# cancelled entry has callback None (lazy deletion: it stays in the heap until it
+# reaches the top, or until cancelled entries are most of the heap: then the heap is
+# compacted, so that an event rescheduled on every edge never bloats it).
+_TIME, _CALLBACK = 0, 3
+COMPACT_MIN = 64  # no compaction below this many cancelled entries
 
 
 class Handle:
     """What ``schedule`` returns: cancel it, or ask when it fires."""
 
-    __slots__ = ("_entry",)
+    __slots__ = ("_clock", "_entry")
 
-    def __init__(self, entry: _Entry) -> None:
+    def __init__(self, clock: SimClock, entry: list[Any]) -> None:
+        self._clock = clock
         self._entry = entry
 
     @property
     def time(self) -> int:
-        return self._entry.time
+        time: int = self._entry[_TIME]
+        return time
 
     @property
     def active(self) -> bool:
-        return not self._entry.cancelled
+        return self._entry[_CALLBACK] is not None
 
     def cancel(self) -> None:
-        self._entry.cancelled = True
+        entry = self._entry
+        if entry[_CALLBACK] is not None:
+            entry[_CALLBACK] = None
+            self._clock._cancelled_one()
 
 
 class SimClock:
@@ -62,9 +67,10 @@ class SimClock:
         if start < 0:
             raise ConfigError(f"clock start must be >= 0 us, got {start}")
         self._now = start
-        self._heap: list[_Entry] = []
+        self._heap: list[list[Any]] = []
         self._seq = itertools.count()
         self._fired = 0
+        self._cancelled = 0  # cancelled entries still in the heap
 
     @property
     def now(self) -> int:
@@ -76,13 +82,26 @@ class SimClock:
         """How many callbacks have run (for benchmarks and tests)."""
         return self._fired
 
+    @property
+    def pending(self) -> int:
+        """Entries in the heap, cancelled ones included (bounded: see COMPACT_MIN)."""
+        return len(self._heap)
+
     def schedule(self, at: int, callback: Callback, priority: int = 0) -> Handle:
         """Run ``callback(at)`` at simulated time ``at`` (>= now)."""
         if at < self._now:
             raise ConfigError(f"cannot schedule at {at} us: time is already {self._now} us")
-        entry = _Entry(at, priority, next(self._seq), callback)
+        entry = [at, priority, next(self._seq), callback]
         heapq.heappush(self._heap, entry)
-        return Handle(entry)
+        return Handle(self, entry)
+
+    def _cancelled_one(self) -> None:
+        self._cancelled += 1
+        heap = self._heap
+        if self._cancelled >= COMPACT_MIN and 2 * self._cancelled > len(heap):
+            heap[:] = [e for e in heap if e[_CALLBACK] is not None]
+            heapq.heapify(heap)
+            self._cancelled = 0
 
     def call_later(self, delay: int, callback: Callback, priority: int = 0) -> Handle:
         """Run ``callback`` ``delay`` microseconds from now."""
@@ -96,23 +115,27 @@ class SimClock:
     def next_deadline(self) -> int | None:
         """Time of the next live event, or None when nothing is scheduled."""
         heap = self._heap
-        while heap and heap[0].cancelled:
+        while heap and heap[0][_CALLBACK] is None:
             heapq.heappop(heap)
-        return heap[0].time if heap else None
+            self._cancelled -= 1
+        return heap[0][_TIME] if heap else None
 
     def run_until(self, until: int) -> None:
         """Run every event due at or before ``until``, then set now = until."""
         if until < self._now:
             raise ConfigError(f"time never goes back: {until} us < now {self._now} us")
         heap = self._heap
-        while heap and heap[0].time <= until:
-            entry = heapq.heappop(heap)
-            if entry.cancelled:
+        pop = heapq.heappop
+        while heap and heap[0][0] <= until:
+            entry = pop(heap)
+            callback = entry[3]
+            if callback is None:
+                self._cancelled -= 1
                 continue
-            self._now = entry.time
-            entry.cancelled = True
+            self._now = at = entry[0]
+            entry[3] = None
             self._fired += 1
-            entry.callback(entry.time)
+            callback(at)
         self._now = until
 
     def advance(self, delta: int) -> None:

@@ -352,7 +352,10 @@ class _Generator:
         return _WORD_OPS[node.op].format(a=self.expr(node.left), b=self.expr(node.right))
 
     def read(self, node: t.Internal | t.InternalBit | t.ModuleObj | t.TxtField) -> str:
-        cell = self.m.cell(node)
+        # a memory may lend more cells for reading than for writing (the PLC's input
+        # images: tsx/plcmemory.py read_cell), read in place, never through a call
+        read_cell = getattr(self.m, "read_cell", self.m.cell)
+        cell = read_cell(node)
         if cell is not None:
             table, index, bit = cell
             ref = f"{self.bind(table)}[{index}]"

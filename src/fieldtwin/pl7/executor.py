@@ -15,6 +15,10 @@
 - Debugging: a breakpoint at a label or a step holds the executor at the end of
   the master task that reached it; ``step()`` runs one master task, ``resume()``
   lets it run again.
+- A master task that changed nothing (every object the program sees as it found
+  it, no Text Block command, no fault) is a fixed point: while what the program
+  sees stays so, the next tasks are counted without being run (``skipped``), with
+  the same result (pl7/watch.py; tests/pl7/test_fixed_point.py).
 """
 
 from __future__ import annotations
@@ -29,6 +33,7 @@ from fieldtwin.pl7.errors import Pl7Error, ProgramFault
 from fieldtwin.pl7.grafcet import ChartLayout, Grafcet
 from fieldtwin.pl7.memory import ProgramMemory
 from fieldtwin.pl7.parser import parse
+from fieldtwin.pl7.watch import Snapshot, WatchedMemory
 
 COLD_RESTART_BIT = 0  # SY0 (AEM 5.1)
 HOT_RESTART_BIT = 1  # SY1 (AEM 2.5-2)
@@ -99,7 +104,20 @@ class Executor:
             self.layout = None
         self.modules: dict[str, Module] = {}
         self._subroutines: dict[int, Module] = {}
-        self._compile(chart)
+        self._effects = 0  # Text Block commands, faults and hits so far
+        self.skipped = 0  # master tasks counted without being run (a fixed point)
+        self.skip_idle = True  # False: every task runs (the benchmarks' baseline)
+        self._fixed: tuple[object, ...] | None = None  # what a fixed point left
+        watched = WatchedMemory(memory, self._effect)
+        self._compile(chart, watched)
+        self._snapshot: Snapshot | None = None
+        if watched.skippable:
+            lists, extra = [self.edges], []
+            if self.grafcet is not None:
+                g = self.grafcet
+                lists.append(g.active)
+                extra.append(lambda: int(g.pending_initial))
+            self._snapshot = watched.snapshot(lists, extra)
         self.cold_restart()
 
     @classmethod
@@ -114,10 +132,13 @@ class Executor:
                 raise Pl7Error(err.line, err.column, err.token, err.expected, source) from None
             raise
 
-    def _compile(self, chart: t.Section | None) -> None:
+    def _effect(self) -> None:
+        self._effects += 1
+
+    def _compile(self, chart: t.Section | None, memory: WatchedMemory) -> None:
         for section in self.program.sections:
             if isinstance(section, t.Literal):
-                module = compile_body(section.name, section.sentences, self.memory, self)
+                module = compile_body(section.name, section.sentences, memory, self)
                 self.modules[section.name] = module
                 if section.name.startswith("SR"):
                     self._subroutines[int(section.name[2:])] = module
@@ -126,14 +147,14 @@ class Executor:
         layout, g = self.layout, self.grafcet
         for item in chart.items:
             if isinstance(item, t.Transition):
-                condition = compile_condition(item.condition, self.memory, self)
+                condition = compile_condition(item.condition, memory, self)
                 source = layout.exit(item.chart, item.source)
                 target = layout.entry(item.chart, item.target)
                 g.transitions.append((source, target, condition, item.pos.line))
             elif isinstance(item, t.StepActions):
                 prefix = "CHART" if item.chart == t.MAIN else f"XM{item.chart}"
                 name = f"{prefix} S({item.kind}){item.step}"
-                module = compile_body(name, item.sentences, self.memory, self)
+                module = compile_body(name, item.sentences, memory, self)
                 table = g.on_activation if item.kind == "A" else g.on_deactivation
                 table[layout.index[(item.chart, item.step)]] = module
 
@@ -177,9 +198,11 @@ class Executor:
         return self._label_breaks.setdefault(module, set())
 
     def hit(self, module: str, label: int) -> None:
+        self._effects += 1
         self._hit(Hit(self.cycles, module, label))
 
     def fault(self, module: str, line: int, err: ProgramFault) -> None:
+        self._effects += 1
         self.faults.append(FaultRecord(module, line, self.cycles, str(err)))
         self._sy[FAULT_BIT](1)
 
@@ -194,10 +217,12 @@ class Executor:
         self.faults.clear()
         self._sy[FAULT_BIT](0)
         self._restart_bit = COLD_RESTART_BIT
+        self._fixed = None
 
     def hot_restart(self) -> None:
         """Everything kept; SY1 reads 1 during the next master task."""
         self._restart_bit = HOT_RESTART_BIT
+        self._fixed = None
 
     def run_master_task(self, now_us: int | None = None) -> bool:
         """One master task (PRE, CHART, POST) unless a breakpoint holds the executor."""
@@ -223,6 +248,27 @@ class Executor:
             self._sy[restart](1)
         if now_us is not None:
             self._sy[MINUTE_BIT](1 if now_us % MINUTE_US >= MINUTE_US // 2 else 0)
+        snapshot = self._snapshot
+        if snapshot is None or restart is not None or not self.skip_idle or self._breakpoints():
+            self._fixed = None
+            self._sections()
+        else:
+            before = snapshot()
+            if before == self._fixed:  # the same as after a task that changed nothing
+                self.skipped += 1
+                return
+            effects = self._effects
+            self._sections()
+            after = snapshot()
+            self._fixed = after if after == before and self._effects == effects else None
+        if restart is not None:
+            self._sy[restart](0)
+            self._restart_bit = None
+
+    def _breakpoints(self) -> bool:
+        return bool(self._step_breaks) or any(self._label_breaks.values())
+
+    def _sections(self) -> None:
         pre = self.modules.get("PRE")
         if pre is not None:
             self.run_module(pre)
@@ -236,9 +282,6 @@ class Executor:
         post = self.modules.get("POST")
         if post is not None:
             self.run_module(post)
-        if restart is not None:
-            self._sy[restart](0)
-            self._restart_bit = None
 
     # --- debugging ----------------------------------------------------------------------
 

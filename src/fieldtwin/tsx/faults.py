@@ -11,6 +11,7 @@ fault 1 ends, until a new read.
 from __future__ import annotations
 
 import enum
+from collections.abc import Callable
 from dataclasses import dataclass
 
 
@@ -33,11 +34,17 @@ class _Latch:
 class FaultLatches:
     """The faults of one module, by their bit number in the fault bit string."""
 
-    def __init__(self) -> None:
+    def __init__(self, on_change: Callable[[], None] | None = None) -> None:
         self._latches: dict[int, _Latch] = {}
+        self._on_change = on_change  # told of every change (the module's bus face)
+
+    def _changed(self) -> None:
+        if self._on_change is not None:
+            self._on_change()
 
     def clear(self) -> None:
         self._latches.clear()
+        self._changed()
 
     def category(self, bit: int) -> FaultCategory | None:
         latch = self._latches.get(bit)
@@ -49,6 +56,7 @@ class FaultLatches:
             if not active:
                 return
             latch = self._latches[bit] = _Latch(category)
+        self._changed()
         if active and not latch.active:
             latch.active = True
             latch.latched = True
@@ -63,6 +71,8 @@ class FaultLatches:
         return bool(latch and latch.active)
 
     def any(self, category: FaultCategory, *, memorised: bool) -> bool:
+        if not self._latches:  # the usual case: no fault was ever raised
+            return False
         return any(
             f.category is category and (f.active or (memorised and f.latched))
             for f in self._latches.values()
@@ -70,6 +80,7 @@ class FaultLatches:
 
     def read(self, length: int) -> bytes:
         """The fault bit string (bit n in byte n // 8); acknowledges every latch."""
+        self._changed()
         data = bytearray(length)
         for bit, latch in self._latches.items():
             if latch.active or latch.latched:

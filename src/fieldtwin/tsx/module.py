@@ -36,7 +36,7 @@ from fieldtwin.tsx.textblock import (
     Exchange,
     Request,
 )
-from fieldtwin.words import get_bit, set_bit
+from fieldtwin.words import get_bit
 
 # IWxy,0 standard status word (AEM 4.4-1 and the quick reference)
 ST_RESET_DONE = 0x2  # ongoing exchange cancelled, follows OWxy,0,2
@@ -53,6 +53,25 @@ ST_RUN = 0xC  # module Run (0 = Stop)
 # OWxy,0 standard command word
 CMD_RESET_EXCHANGE = 0x2  # message-system reset
 CMD_RUN = 0xC  # module Run/Stop
+
+PRUNE_MIN = 32  # handles kept before the fired ones are dropped from the list
+BusListener = Callable[["IntelligentModule"], None]
+
+
+class InputWords(list[int]):
+    """IWxy,0..7 as the module writes them: a list that tells its module of every
+    write, so that the PLC reads the bus face of a module only after it changed
+    (DESIGN rule 3: an idle module costs nothing at the bus refresh)."""
+
+    __slots__ = ("_changed",)
+
+    def __init__(self, values: list[int], changed: Callable[[], None]) -> None:
+        super().__init__(values)
+        self._changed = changed
+
+    def __setitem__(self, key: Any, value: Any) -> None:
+        list.__setitem__(self, key, value)
+        self._changed()
 
 
 class IntelligentModule:
@@ -86,17 +105,54 @@ class IntelligentModule:
         self._mode: Machine[ModuleState, ModuleEvent, IntelligentModule] = Machine(
             MODES, ModuleState.OFF, self
         )
-        self.iw = [0] * 8  # written by the module, read by the PLC
+        # The bus face (IWxy,i, Ixy,i, Ixy,S) changed since the PLC last read it: set
+        # by every write of iw or i_bits, every change of mode or fault; the PLC's
+        # listener is told once, when the flag goes up (Plc.insert sets it).
+        self.bus_dirty = True
+        self.bus_listener: BusListener | None = None
+        self._iw = InputWords([0] * 8, self.bus_changed)  # written by the module
+        self._i_bits = 0
         self.ow = [0] * 8  # written by the PLC
-        self.i_bits = 0
         self.o_bits = 0
         self.awaiting_configuration = False
         self.app_name = b""
-        self._faults = FaultLatches()
+        self._faults = FaultLatches(self.bus_changed)
         self.exchanges = Exchanges(self)  # the message interface (AEM 2.4-4)
-        self._handles: list[ClockHandle] = []
+        self._handles: list[ClockHandle] = []  # what a power-off cancels
+        self._prune_at = PRUNE_MIN
         self._self_test: ClockHandle | None = None
         self._hardware_faults: set[int] = set()  # found by the next initial self-test
+
+    # --- the bus face: what the PLC reads --------------------------------------
+
+    @property
+    def iw(self) -> list[int]:
+        """The input words IWxy,0..7 (the PLC reads them at its bus refresh)."""
+        return self._iw
+
+    @iw.setter
+    def iw(self, values: list[int]) -> None:
+        self._iw = InputWords(list(values), self.bus_changed)
+        self.bus_changed()
+
+    @property
+    def i_bits(self) -> int:
+        """The discrete input bits Ixy,0..F."""
+        return self._i_bits
+
+    @i_bits.setter
+    def i_bits(self, value: int) -> None:
+        if value != self._i_bits:
+            self._i_bits = value
+            self.bus_changed()
+
+    def bus_changed(self) -> None:
+        """Something the PLC reads may have changed: it reads this module again."""
+        if not self.bus_dirty:
+            self.bus_dirty = True
+            listener = self.bus_listener
+            if listener is not None:
+                listener(self)
 
     # --- identity ---------------------------------------------------------
 
@@ -114,13 +170,18 @@ class IntelligentModule:
     # --- scheduling that power-off cancels -------------------------------
 
     def call_later(self, delay: int, callback: Callable[[int], None]) -> ClockHandle:
-        handle = self.clock.call_later(delay, callback)
-        self._handles = [h for h in self._handles if h.active]
-        self._handles.append(handle)
-        return handle
+        return self.call_at(self.clock.now + delay, callback)
 
     def call_at(self, at: int, callback: Callable[[int], None]) -> ClockHandle:
-        return self.call_later(at - self.clock.now, callback)
+        if at < self.clock.now:
+            raise ConfigError(f"delay must be >= 0 us, got {at - self.clock.now}")
+        handle = self.clock.schedule(at, callback)
+        handles = self._handles
+        handles.append(handle)
+        if len(handles) > self._prune_at:  # fired and cancelled handles go, in bulk
+            self._handles = handles = [h for h in handles if h.active]
+            self._prune_at = max(PRUNE_MIN, 2 * len(handles))
+        return handle
 
     # --- the operating-mode machine (DESIGN rule 4: the MODES table below) --
 
@@ -136,6 +197,7 @@ class IntelligentModule:
                 f" in state {self.state.value}"
             )
         self._mode.fire(event, now)
+        self.bus_changed()
         self.refresh_status()
 
     def power_on(self, now: int | None = None) -> None:
@@ -256,7 +318,7 @@ class IntelligentModule:
 
     @property
     def running(self) -> bool:
-        return bool(get_bit(self.iw[0], ST_RUN))
+        return bool(self._iw[0] >> ST_RUN & 1)
 
     def _compute_run(self) -> bool:
         if self.state is not ModuleState.OPERATIONAL or not self.code_ok:
@@ -265,7 +327,7 @@ class IntelligentModule:
             return False
         if self._faults.any(FaultCategory.MODULE, memorised=False):
             return False  # AEM 2.5-4: module to Stop until the fault disappears
-        return bool(get_bit(self.ow[0], CMD_RUN)) and self.run_permitted()
+        return bool(self.ow[0] >> CMD_RUN & 1) and self.run_permitted()
 
     # --- faults (AEM 4.4-1) ------------------------------------------------
 
@@ -320,9 +382,10 @@ class IntelligentModule:
     @property
     def module_fault(self) -> bool:
         """Ixy,S: blocking or module fault, wrong declared code (AEM 4.4-1)."""
-        if self.state is ModuleState.OFF or not self.code_ok:
+        state = self._mode.state
+        if state is ModuleState.OFF or state is ModuleState.BLOCKED:
             return True
-        if self.state is ModuleState.BLOCKED:
+        if self.declared_code is not None and not self.code_ok:
             return True
         return self._any(FaultCategory.MODULE, memorised=False)
 
@@ -354,23 +417,25 @@ class IntelligentModule:
 
     def standard_status(self) -> int:
         word = self.iw[0] & ~0x1FFC & 0xFFFF  # keep bits a subclass owns (0, 1, D..F)
-        if self.state is ModuleState.OFF:
+        state = self._mode.state
+        if state is ModuleState.OFF:
             return 0
         module = self._any(FaultCategory.MODULE, memorised=True)
         application = self._any(FaultCategory.APPLICATION, memorised=True)
-        word = set_bit(word, ST_RESET_DONE, get_bit(self.ow[0], CMD_RESET_EXCHANGE))
-        word = set_bit(word, ST_READY, self.state is ModuleState.OPERATIONAL)
-        word = set_bit(word, ST_MODULE_FAULT, module)
-        word = set_bit(word, ST_APPLICATION_FAULT, application)
-        word = set_bit(word, ST_GENERAL_FAULT, module or application)
+        # bits 2..C are clear in ``word``: each is OR-ed in once
+        word |= ((self.ow[0] >> CMD_RESET_EXCHANGE) & 1) << ST_RESET_DONE
+        word |= (state is ModuleState.OPERATIONAL) << ST_READY
+        word |= bool(module) << ST_MODULE_FAULT
+        word |= bool(application) << ST_APPLICATION_FAULT
+        word |= bool(module or application) << ST_GENERAL_FAULT
         # AEM 4.4-1: "Blocking fault, or module absent or incorrectly coded"
-        blocked = self.state is ModuleState.BLOCKED or not self.code_ok
-        word = set_bit(word, ST_BLOCKING_FAULT, blocked)
-        word = set_bit(word, ST_SELF_TEST, self.state is ModuleState.SELF_TEST)
+        blocked = state is ModuleState.BLOCKED or not self.code_ok
+        word |= blocked << ST_BLOCKING_FAULT
+        word |= (state is ModuleState.SELF_TEST) << ST_SELF_TEST
         tb = self.terminal_block_fault_bit
-        word = set_bit(word, ST_TERMINAL_BLOCK, tb is not None and self.fault_active(tb))
-        word = set_bit(word, ST_AWAITING_CONFIG, self.awaiting_configuration)
-        return set_bit(word, ST_RUN, self._compute_run())
+        word |= (tb is not None and self.fault_active(tb)) << ST_TERMINAL_BLOCK
+        word |= bool(self.awaiting_configuration) << ST_AWAITING_CONFIG
+        return word | bool(self._compute_run()) << ST_RUN
 
     def refresh_status(self) -> None:
         """Recompute IWxy,0; call after anything that may change it."""
@@ -378,7 +443,9 @@ class IntelligentModule:
             self.iw[0] = 0
             return
         was_running = self.running
-        self.iw[0] = self.standard_status()
+        word = self.standard_status()
+        if self._iw[0] != word:  # an unchanged word is not written: no new bus read
+            self._iw[0] = word
         if self.running != was_running:
             self.on_run_changed(self.running, self.clock.now)
 
@@ -396,7 +463,7 @@ class IntelligentModule:
         self.refresh_status()
 
     def bus_read(self) -> BusImage:
-        return BusImage(tuple(self.iw), self.i_bits, self.module_fault)
+        return BusImage(tuple(self._iw), self._i_bits, self.module_fault)
 
     # --- the message interface (the Exchanges component, tsx/messages.py) -----
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TypeVar
 
@@ -81,13 +81,40 @@ _INTERNAL_RE = re.compile(r"^(XM|X|B|CW|SY|SW|W)(\d{1,5})(?:,([0-9A-F]))?$", re.
 ABSENT = BusImage((1 << 8,) + (0,) * 7, 0, True)  # what an empty slot reads
 
 
-@dataclass(slots=True)
 class _Slot:
-    module: IntelligentModule
-    present: bool = True
-    image: BusImage = field(default_factory=lambda: BusImage((0,) * 8, 0, True))
-    ow: list[int] = field(default_factory=lambda: [0] * 8)
-    o_bits: int = 0
+    """A slot's images.  The program reads and writes them in place (plcmemory cells):
+    ``words`` and ``inputs`` follow ``image`` (IWxy,0..7; Ixy,i and Ixy,S), ``outputs``
+    holds the output bits Oxy,i."""
+
+    __slots__ = ("_image", "inputs", "module", "outputs", "ow", "present", "words")
+
+    def __init__(self, module: IntelligentModule) -> None:
+        self.module = module
+        self.present = True
+        self.ow = [0] * 8
+        self.outputs = [0]  # [Oxy,0..F as a mask]
+        self.words = [0] * 8  # image.iw as a list
+        self.inputs = [0, 1]  # [image.i_bits, image.fault]
+        self._image = BusImage((0,) * 8, 0, True)
+
+    @property
+    def image(self) -> BusImage:
+        return self._image
+
+    @image.setter
+    def image(self, image: BusImage) -> None:
+        self._image = image
+        self.words[:] = image.iw
+        self.inputs[0] = image.i_bits
+        self.inputs[1] = int(image.fault)
+
+    @property
+    def o_bits(self) -> int:
+        return self.outputs[0]
+
+    @o_bits.setter
+    def o_bits(self, value: int) -> None:
+        self.outputs[0] = value
 
 
 class Plc:
@@ -101,6 +128,7 @@ class Plc:
         clock: SimClock | None = None,
         runner: Pacer | None = None,
         speed: float | None = 1.0,
+        event_driven: bool = True,
     ) -> None:
         if model not in MODELS:
             raise ConfigError(f"unknown PLC model {model!r} (allowed: {', '.join(MODELS)})")
@@ -126,6 +154,15 @@ class Plc:
         self.watch = [f"W{i}" for i in range(8)]  # the words the live view shows
         self.calendar_epoch_s: int | None = None  # SW51..SW56 at simulated time 0
         self._slots: dict[tuple[int, int], _Slot] = {}
+        # The bus refresh (see _end_of_task): event-driven, a slot is refreshed only
+        # after its module's bus face changed (module.bus_dirty) or the PLC's output
+        # image may have changed, and a program's idle tasks are skipped (pl7/watch.py);
+        # else every slot and the whole program at every task, as the real PLC does
+        # (kept for the benchmarks' baseline and the equivalence tests).
+        self.event_driven = event_driven
+        self._bus_pending = False  # a module's face changed since the last refresh
+        self._outputs_touched = False  # outputs written from outside the program
+        self._calendar_words: tuple[int, list[tuple[int, int]]] = (-1, [])
         self._scan: Handle | None = self.clock.call_later(self.scan_us, self._end_of_task)
 
     # --- racks and slots -------------------------------------------------------
@@ -147,6 +184,8 @@ class Plc:
         ctx = ModuleContext(self.clock, self.model.name, self._enable_pacing)
         module = make(ctx, rack, slot, declared_code=code, **options)
         self._slots[(rack, slot)] = _Slot(module)
+        module.bus_listener = self._bus_changed
+        self._bus_pending = True
         module.power_on()
         return module
 
@@ -204,6 +243,7 @@ class Plc:
         """Pull a module out of its slot under power."""
         entry = self._entry(rack, slot)
         entry.present = False
+        self._bus_pending = entry.module.bus_dirty = True  # the slot now reads ABSENT
         entry.module.power_off()
         # AEM 4.4-1 "module absent" is a module fault: TXTi,S = 4, not a power break
         self.txt.end_all(ERR_MODULE_FAULT, self.clock.now, (rack, slot))
@@ -281,23 +321,78 @@ class Plc:
 
     # --- the master task and the bus ------------------------------------------
 
+    def _bus_changed(self, module: IntelligentModule) -> None:
+        self._bus_pending = True
+
     def _end_of_task(self, now: int) -> None:
         self._scan = self.clock.call_later(self.scan_us, self._end_of_task)
         if not self._powered:
             return
         self.cycles += 1
         program = self.program
+        wrote = program is not None  # the program may have written the output image
         if program is not None and self.running:  # PRE, CHART, POST on the input image
             if self.calendar_epoch_s is not None:
-                for word, value in calendar_words(self.calendar_epoch_s + now // S).items():
+                for word, value in self._calendar(self.calendar_epoch_s + now // S):
                     self.sw[word] = value
+            skipped = program.skipped
+            program.skip_idle = self.event_driven  # else every task runs, as on the PLC
             program.run_master_task(now)
+            wrote = program.skipped == skipped  # a skipped task wrote nothing
         registers = self.cycles % self.model.register_every == 0
-        for entry in self._slots.values():
-            self._refresh(entry, registers, now)
+        if not self.event_driven:
+            for entry in self._slots.values():
+                self._refresh(entry, registers, now)
+        elif wrote or self._outputs_touched or self._bus_pending:
+            self._refresh_changed(wrote, registers, now)
         self.txt.end_of_task(now, self.running)
 
+    def _calendar(self, epoch_s: int) -> list[tuple[int, int]]:
+        """SW51..SW56 of ``epoch_s``, computed once a second (written at every task)."""
+        if self._calendar_words[0] != epoch_s:
+            self._calendar_words = (epoch_s, list(calendar_words(epoch_s).items()))
+        return self._calendar_words[1]
+
+    def _refresh_changed(self, outputs: bool, registers: bool, now: int) -> None:
+        """The event-driven bus refresh, with the same result as ``_refresh`` on every
+        slot: the outputs are written where the output image differs from what the
+        module holds, the input image is read again only from a module whose face
+        changed (its images are equal to what a read would give: the property tests
+        in tests/tsx/test_bus_refresh.py), in slot order, as the real PLC does."""
+        outputs = outputs or self._outputs_touched
+        # a TSX 47-20 odd cycle writes the bits only: the words at the next cycle
+        self._outputs_touched = outputs and not registers
+        self._bus_pending = False
+        for entry in self._slots.values():
+            module = entry.module
+            if not (outputs or module.bus_dirty):
+                continue
+            if not entry.present:  # AEM 4.4-1: IWxy,0,8 "module absent", Ixy,S
+                entry.image = ABSENT
+                module.bus_dirty = False
+                continue
+            o_bits = entry.outputs[0]
+            if registers:
+                if o_bits != module.o_bits or entry.ow != module.ow:
+                    module.bus_write(entry.ow, o_bits, now)
+            elif o_bits != module.o_bits:
+                module.bus_write(module.ow, o_bits, now)
+            if not module.bus_dirty:
+                continue
+            image = entry.image
+            i_bits, fault = module.i_bits, module.module_fault
+            if registers:
+                module.bus_dirty = False
+                iw = tuple(module.iw)
+                if image.iw != iw or image.i_bits != i_bits or image.fault != fault:
+                    entry.image = BusImage(iw, i_bits, fault)
+            else:  # TSX 47-20 odd cycle: discrete bits only; the words at the next one
+                self._bus_pending = True
+                if image.i_bits != i_bits or image.fault != fault:
+                    entry.image = BusImage(image.iw, i_bits, fault)
+
     def _refresh(self, entry: _Slot, registers: bool, now: int) -> None:
+        """The bus refresh of one slot at every task (``event_driven=False``)."""
         module = entry.module
         if not entry.present:  # AEM 4.4-1: IWxy,0,8 "module absent", Ixy,S
             entry.image = ABSENT
@@ -330,6 +425,7 @@ class Plc:
         for entry in self._slots.values():
             entry.ow[:] = [0] * 8  # in place: a program's compiled cells are these lists
             entry.o_bits = 0
+        self._outputs_touched = True
         for entry in present:
             entry.module.power_on()
         if self.program is not None:  # SY0; internal bits and words cleared
@@ -420,6 +516,7 @@ class Plc:
             return
         ref = parse_object(name)
         entry = self._entry(ref.rack, ref.slot)
+        self._outputs_touched = True
         if ref.kind is ObjectKind.OW:
             i = _index(ref)
             if ref.bit is None:
@@ -474,7 +571,8 @@ class Plc:
         self.memory.declarations[index] = declaration
 
     def slot_entry(self, rack: int, slot: int) -> _Slot:
-        """The slot's images (the program's module objects)."""
+        """The slot's images (the program's module objects: with a program loaded,
+        the outputs are compared with the modules' at every task)."""
         return self._entry(rack, slot)
 
     def _internal(self, name: str) -> Callable[[], int] | None:

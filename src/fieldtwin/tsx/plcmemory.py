@@ -34,6 +34,7 @@ SYSTEM_BITS = 128
 SYSTEM_WORDS = 128
 INTERNAL_BITS = 4096
 CONSTANT_WORDS = 4096
+_INPUTS = (ObjectKind.IW, ObjectKind.I, ObjectKind.FAULT)
 TABLE_TYPES = {0: "W", 1: "CW"}  # addressing-table type words (our reading, manual-notes)
 
 
@@ -70,7 +71,23 @@ class PlcMemory:
         if isinstance(obj, t.ModuleObj) and obj.ref.kind is ObjectKind.OW:
             entry = self.plc.slot_entry(obj.ref.rack, obj.ref.slot)
             return entry.ow, obj.ref.index or 0, obj.ref.bit
+        if isinstance(obj, t.ModuleObj) and obj.ref.kind is ObjectKind.O:
+            entry = self.plc.slot_entry(obj.ref.rack, obj.ref.slot)
+            return entry.outputs, 0, obj.ref.index or 0
         return None
+
+    def read_cell(self, obj: BitObject | t.Internal | t.ModuleObj | t.TxtField) -> Cell | None:
+        """``cell``, and the input images too (read in place by the compiled program;
+        never written: ``cell`` gives no input, so a store to one is refused)."""
+        if isinstance(obj, t.ModuleObj) and obj.ref.kind in _INPUTS:
+            ref = obj.ref
+            entry = self.plc.slot_entry(ref.rack, ref.slot)
+            if ref.kind is ObjectKind.IW:
+                return entry.words, ref.index or 0, ref.bit
+            if ref.kind is ObjectKind.I:
+                return entry.inputs, 0, ref.index or 0
+            return entry.inputs, 1, None  # Ixy,S
+        return self.cell(obj)
 
     def bit_reader(self, obj: BitObject) -> Reader:
         if isinstance(obj, t.TxtField):

@@ -173,6 +173,7 @@ TXT: Table[TxtState, TxtInput] = Table(
 
 
 _BUSY = (TxtState.STARTED, TxtState.IN_MODULE, TxtState.ANSWERED)
+_WORK = (TxtState.STARTED, TxtState.ANSWERED)  # what the end of a master task acts on
 
 
 class TextBlocks:
@@ -198,11 +199,17 @@ class TextBlocks:
 
     def end_of_task(self, now: int, running: bool) -> None:
         """Report the answers that came in, then validate the new requests."""
-        for tb in self._txts.values():
+        txts = self._txts.values()
+        for tb in txts:
+            if tb.machine.state in _WORK:
+                break
+        else:
+            return  # nothing to report or validate: an idle task costs one look
+        for tb in txts:
             if tb.state is TxtState.ANSWERED and tb.answered_at_us < now:
                 self._finish(tb, TxtInput.REPORT, now)
         if running:
-            for tb in self._txts.values():
+            for tb in txts:
                 if tb.state is TxtState.STARTED:
                     self._validate(tb, now)
 

@@ -432,7 +432,7 @@ class Dem24(IntelligentModule):
         return self.terminal_block and (self.supply or not self.config.supply_monitoring)
 
     def _refresh_words(self) -> None:
-        if self.state is ModuleState.OFF:
+        if self._mode.state is ModuleState.OFF:
             return
         logbook = self.logbook
         timebase, stack = logbook.timebase, logbook.stack
@@ -440,6 +440,12 @@ class Dem24(IntelligentModule):
         supply = self.fault_active(FB_SUPPLY)
         image = self.image()
         iw = self.iw
-        iw[2] = status_word(self.diag_word, self.logging, ready, supply, self.default_config)
-        iw[5], iw[6], iw[7] = count, image & 0xFFFF, image >> 16
+        # self.logging, with ``ready`` known already
+        logging = ready and not self.awaiting_configuration and not get_bit(self.ow[1], OW1_STOP)
+        word = status_word(self.diag_word, logging, ready, supply, self.default_config)
+        if iw[2] != word:  # only what changed is written: the PLC reads it again then
+            iw[2] = word
+        low, high = image & 0xFFFF, image >> 16
+        if iw[5] != count or iw[6] != low or iw[7] != high:
+            iw[5:8] = count, low, high
         self.i_bits = input_bits(ready, count, stack.full, timebase.fault, self.pulse_image)

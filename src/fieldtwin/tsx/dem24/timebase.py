@@ -168,7 +168,8 @@ class Timebase:
     @property
     def ready(self) -> bool:
         """Date set and pulse received (DEM 2.4-2 note (1)): Ixy,0 / IWxy,2,7."""
-        return self.machine.state in _READY
+        state = self.machine.state  # compared by identity: no enum hashing per edge
+        return state is TimeState.SET or state is TimeState.SET_RECEIVED
 
     def now(self, t: int) -> CivilTime:
         return CivilTime.from_ms(self.clock.ms(t))
@@ -228,8 +229,6 @@ class Timebase:
             self.fault = True
             self._outcome = SyncOutcome(fault=True)
 
-
-_READY = frozenset({TimeState.SET, TimeState.SET_RECEIVED})
 
 _NS, _RX, _SET, _SRX = (
     TimeState.NOT_SET,
