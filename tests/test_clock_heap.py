@@ -69,3 +69,17 @@ def test_same_order_as_a_sorted_reference(script: list[tuple[str, int, int]]) ->
             clock.run_until(until)
             assert seen == expected
     assert all(h.active == (n in live) for n, h in enumerate(handles))
+
+
+def test_run_one_runs_a_single_event_of_an_instant_and_skips_cancelled_ones() -> None:
+    from fieldtwin.clock import SimClock
+
+    clock = SimClock()
+    seen: list[str] = []
+    gone = clock.schedule(5, lambda t: seen.append("cancelled"))
+    clock.schedule(5, lambda t: seen.append("a"))
+    clock.schedule(5, lambda t: seen.append("b"))
+    gone.cancel()
+    assert clock.run_one() and seen == ["a"] and clock.now == 5
+    assert clock.run_one() and seen == ["a", "b"] and clock.fired == 2
+    assert not clock.run_one()

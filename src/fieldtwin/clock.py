@@ -138,6 +138,23 @@ class SimClock:
             callback(at)
         self._now = until
 
+    def run_one(self) -> bool:
+        """Run the next live event alone (not the others of its instant); False when
+        nothing is scheduled.  A replay uses it to stand between two recorded events."""
+        heap = self._heap
+        while heap:
+            entry = heapq.heappop(heap)
+            callback = entry[_CALLBACK]
+            if callback is None:
+                self._cancelled -= 1
+                continue
+            self._now = at = entry[_TIME]
+            entry[_CALLBACK] = None
+            self._fired += 1
+            callback(at)
+            return True
+        return False
+
     def advance(self, delta: int) -> None:
         """Advance simulated time by ``delta`` microseconds, running due events."""
         if delta < 0:

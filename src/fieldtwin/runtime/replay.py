@@ -17,7 +17,6 @@ and shows it in context.
 
 from __future__ import annotations
 
-import heapq
 import json
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
@@ -36,22 +35,8 @@ CONTEXT = 3  # records shown before and after a first difference
 
 
 class ReplayClock(SimClock):
-    """A SimClock that can run one event at a time, and stand at an instant with
+    """A SimClock that can stand at an instant with
     events of that instant still due (as the recorded clock stood when bytes came)."""
-
-    def run_one(self) -> bool:
-        """Run the next live event alone; False when nothing is scheduled."""
-        heap = self._heap
-        while heap:
-            entry = heapq.heappop(heap)
-            if entry.cancelled:
-                continue
-            self._now = entry.time
-            entry.cancelled = True
-            self._fired += 1
-            entry.callback(entry.time)
-            return True
-        return False
 
     def stand_at(self, t_us: int) -> None:
         """Now = ``t_us``; every event before it has run (those at it may wait)."""
