@@ -35,6 +35,7 @@ COUNTER_ORDER = (
     Counter.GOOD_FRAMES,
     Counter.NO_SILENCE,
 )
+_COUNTER_INDEX = {counter: i for i, counter in enumerate(COUNTER_ORDER)}
 
 
 def link_key(link: Link) -> str:
@@ -61,7 +62,7 @@ class LinkCounters:
             counter = Counter.NOT_READY_REPLIES
         if counter in (Counter.EXCEPTION_REPLIES, Counter.NOT_READY_REPLIES):
             self.not_ready_owed = False
-        i = COUNTER_ORDER.index(counter)
+        i = _COUNTER_INDEX[counter]
         self.values[i] = (self.values[i] + 1) & 0xFFFF
 
 
