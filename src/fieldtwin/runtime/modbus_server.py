@@ -23,7 +23,7 @@ from fieldtwin.modbus.model import Link, SlaveDevice
 from fieldtwin.modbus.rtu import MAX_FRAME
 from fieldtwin.modbus.session import TcpSession
 from fieldtwin.modbus.slave import SlaveSet, Transmission
-from fieldtwin.modbus.timing import RtuTiming
+from fieldtwin.modbus.timing import RtuTiming, WireTiming
 from fieldtwin.runtime.events import EventBus
 from fieldtwin.runtime.runner import Runner
 from fieldtwin.runtime.wiretap import Stream, Wiretap
@@ -56,10 +56,15 @@ class _Pump:
         transport: Transport,
         core: Core,
         server: ModbusServer | None = None,
+        precise: bool = False,
     ) -> None:
         self.runner = runner
         self.transport = transport
         self.core = core
+        # a wire-timed line: its replies are due to a fraction of a ms (runner waits)
+        self._precise = precise
+        if precise:
+            runner.want_precise_waits(True)
         self._timer: Handle | None = None
         self._server = server  # its open pumps: this one leaves them on close
         self._stream: Stream | None = None  # the wiretap's decoder, made when first observed
@@ -86,6 +91,9 @@ class _Pump:
         self.close()
 
     def close(self) -> None:
+        if self._precise:
+            self._precise = False
+            self.runner.want_precise_waits(False)
         if self._server is not None:
             self._server.pumps.pop(id(self), None)
         if self._timer is not None:
@@ -145,6 +153,11 @@ def _max_lead(timing: RtuTiming) -> int:
     """A real line carries at most one longest frame beyond what the wall has seen
     (issue 10 item 5): more is a UART overrun (see modbus/rtu.py)."""
     return MAX_FRAME * timing.char_us
+
+
+def _carries_baud(transport: Transport) -> bool:
+    """A UART that sends at the baud rate itself (not a pty, whatever its path)."""
+    return bool(getattr(transport, "carries_baud", False))
 
 
 def _scaled(runner: Runner, floor_us: int) -> int:
@@ -224,16 +237,25 @@ def serve_rtu(
     link: Link,
     settings: LineSettings,
     wiring: Wiring = Wiring.DOUBLE_PAIR,
+    wire_timing: bool = True,
 ) -> ModbusServer:
-    """A Modbus RTU line on ``transport`` (pty, serial port or memory)."""
+    """A Modbus RTU line on ``transport`` (pty, serial port or memory).
+
+    ``wire_timing`` (real transports): each reply leaves when a real line would
+    deliver its last character (``WireTiming``); off, it leaves its answer delay
+    after the request's last byte was read (for throughput tests).
+    """
     timing = RtuTiming.from_format(settings)
+    wire = None
     if transport.is_real:
+        if wire_timing:
+            wire = WireTiming.from_format(settings, carried=_carries_baud(transport))
         floor = _scaled(runner, REAL_LINE_FLOOR_US)
         timing = timing.relaxed(floor, eager=True, max_lead_us=_max_lead(timing))
-    line = RtuLine(devices, link, timing, wiring)
+    line = RtuLine(devices, link, timing, wiring, wire)
     where = f"pty {transport.peer_path}" if transport.peer_path else transport.name
     server = ModbusServer(runner, "modbus-rtu", where, line.slaves, str(settings), timing=timing)
-    _Pump(runner, transport, line, server)
+    _Pump(runner, transport, line, server, precise=wire is not None)
     return server
 
 
@@ -244,11 +266,16 @@ def serve_rtu_over_tcp(
     settings: LineSettings,
     link: Link = Link.RS485,
     wiring: Wiring = Wiring.DOUBLE_PAIR,
+    wire_timing: bool = True,
 ) -> ModbusServer:
-    """RTU frames inside TCP connections (a serial-to-Ethernet gateway in front of a line)."""
+    """RTU frames inside TCP connections (a serial-to-Ethernet gateway in front of a line).
+
+    ``wire_timing``: as for ``serve_rtu`` (the stream carries no baud rate).
+    """
     devices = tuple(devices)
     slaves = SlaveSet(devices, link)
     timing = RtuTiming.from_format(settings)
+    wire = WireTiming.from_format(settings) if wire_timing else None
     floor = _scaled(runner, TCP_STREAM_FLOOR_US)
     timing = timing.relaxed(floor, eager=True, max_lead_us=_max_lead(timing))
     where = url_of("rtu+tcp", listener)
@@ -257,7 +284,8 @@ def serve_rtu_over_tcp(
     )
 
     def on_connect(transport: Transport, now: int) -> None:
-        _Pump(runner, transport, RtuLine(devices, link, timing, wiring), server)
+        line = RtuLine(devices, link, timing, wiring, wire)
+        _Pump(runner, transport, line, server, precise=wire is not None)
 
     runner.attach_listener(listener, on_connect)
     return server

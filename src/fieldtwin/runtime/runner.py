@@ -231,6 +231,15 @@ class Runner:
         self._forget(link.fd, link)
         self._closed.append(link)
 
+    # -- precise waits (issue 15 item 2: wire-timed RTU replies; docs/modbus.md)
+
+    def want_precise_waits(self, on: bool) -> None:
+        """A core whose deadlines must be met to a fraction of a millisecond on the wall
+        (``on``), or that no longer needs it; a wall without the ability ignores it."""
+        want = getattr(self._wall, "want_precision", None)
+        if want is not None:
+            want(on)
+
     @property
     def paced(self) -> bool:
         """True while a real transport or a listener is attached and speed is a number."""

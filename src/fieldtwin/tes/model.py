@@ -67,6 +67,9 @@ class Tes:
     ) -> None:
         self.model = model if isinstance(model, TesModel) else model_named(model)
         self.link = link  # the port this TES is reached on: ``slave`` is its number there
+        # on a real RTU endpoint, replies leave when a real line would deliver them
+        # (TES 7.2.7, docs/modbus.md "Wire timing"); the plant key ``wire_timing``
+        self.wire_timing = True
         self.clock = clock if clock is not None else SimClock()
         self.name = name or f"{self.model.name} #{slave or 1}"
         self.prm_jumper = prm_jumper
