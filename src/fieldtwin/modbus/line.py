@@ -39,13 +39,17 @@ class RtuLine:
 
     def __init__(
         self,
-        devices: Iterable[SlaveDevice],
+        devices: Iterable[SlaveDevice] | SlaveSet,
         link: Link,
         timing: RtuTiming,
         wiring: Wiring = Wiring.DOUBLE_PAIR,
         wire: WireTiming | None = None,
     ) -> None:
-        self.slaves = SlaveSet(devices, link)
+        # one line, one set: the line-wide counters are counted once per frame
+        if isinstance(devices, SlaveSet):
+            self.slaves = devices
+        else:
+            self.slaves = SlaveSet(devices, link, shared_counts=True)
         self.link = link
         self.timing = timing
         self.wiring = wiring

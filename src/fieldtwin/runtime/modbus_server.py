@@ -61,10 +61,10 @@ class _Pump:
         self.runner = runner
         self.transport = transport
         self.core = core
-        # a wire-timed line: its replies are due to a fraction of a ms (runner waits)
-        self._precise = precise
-        if precise:
-            runner.want_precise_waits(True)
+        # a wire-timed line: while it has a deadline (a reply due), the runner's waits
+        # end on time to a fraction of a ms; not otherwise (precise waits cost naps)
+        self._wired = precise
+        self._precise = False
         self._timer: Handle | None = None
         self._server = server  # its open pumps: this one leaves them on close
         self._stream: Stream | None = None  # the wiretap's decoder, made when first observed
@@ -90,10 +90,13 @@ class _Pump:
     def on_close(self, now: int) -> None:
         self.close()
 
+    def _want_precise(self, on: bool) -> None:
+        if on is not self._precise:
+            self._precise = on
+            self.runner.want_precise_waits(on)
+
     def close(self) -> None:
-        if self._precise:
-            self._precise = False
-            self.runner.want_precise_waits(False)
+        self._want_precise(False)
         if self._server is not None:
             self._server.pumps.pop(id(self), None)
         if self._timer is not None:
@@ -126,6 +129,8 @@ class _Pump:
 
     def _rearm(self) -> None:
         deadline = self.core.next_deadline()
+        if self._wired:
+            self._want_precise(deadline is not None)
         timer = self._timer
         if timer is not None and timer.active and timer.time == deadline:
             return
@@ -273,7 +278,8 @@ def serve_rtu_over_tcp(
     ``wire_timing``: as for ``serve_rtu`` (the stream carries no baud rate).
     """
     devices = tuple(devices)
-    slaves = SlaveSet(devices, link)
+    # every connection is one more master on the same line: one set, one line-wide tally
+    slaves = SlaveSet(devices, link, shared_counts=True)
     timing = RtuTiming.from_format(settings)
     wire = WireTiming.from_format(settings) if wire_timing else None
     floor = _scaled(runner, TCP_STREAM_FLOOR_US)
@@ -284,7 +290,7 @@ def serve_rtu_over_tcp(
     )
 
     def on_connect(transport: Transport, now: int) -> None:
-        line = RtuLine(devices, link, timing, wiring, wire)
+        line = RtuLine(slaves, link, timing, wiring, wire)
         _Pump(runner, transport, line, server, precise=wire is not None)
 
     runner.attach_listener(listener, on_connect)

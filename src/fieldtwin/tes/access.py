@@ -216,8 +216,8 @@ _READERS: dict[Kind, Reader] = {
     Kind.CHANNEL_STATE: lambda rf, reg, now: rf.channel_state(reg.index),
     Kind.ANALOG_OUTPUT: _word,
     Kind.HISTORY: lambda rf, reg, now: rf.ai.history(reg.index // 120, reg.index % 120),
-    Kind.DIAG_RS485: lambda rf, reg, now: rf.ram.counters["rs485"].values[reg.index],
-    Kind.DIAG_RS232: lambda rf, reg, now: rf.ram.counters["rs232"].values[reg.index],
+    Kind.DIAG_RS485: lambda rf, reg, now: rf.ram.counters["rs485"].value(reg.index),
+    Kind.DIAG_RS232: lambda rf, reg, now: rf.ram.counters["rs232"].value(reg.index),
     Kind.SC: lambda rf, reg, now: rf.wiring_bits(Wiring.SHORT, reg.index),
     Kind.OC: lambda rf, reg, now: rf.wiring_bits(Wiring.OPEN, reg.index),
     Kind.FAULT: lambda rf, reg, now: rf.wiring_bits(None, reg.index),
@@ -235,7 +235,7 @@ def _put_blink_select(rf: RegisterFile, reg: Register, value: int, now: int) -> 
 
 
 def _put_diag(rf: RegisterFile, reg: Register, value: int, now: int) -> None:
-    rf.ram.counters[reg.kind.value[5:]].values[reg.index] = value
+    rf.ram.counters[reg.kind.value[5:]].set(reg.index, value)
 
 
 def _put_analog_output(rf: RegisterFile, reg: Register, value: int, now: int) -> None:
