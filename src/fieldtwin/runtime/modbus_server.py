@@ -194,6 +194,7 @@ class ModbusServer:
         self.closed = False
         self.wiretap: Wiretap | None = None
         self._timing = timing  # the RTU framing a wiretap copies (None: MBAP)
+        self._holding = False  # holds the runner's pace (a real RTU line)
 
     def tap(self, bus: EventBus, endpoint: str) -> None:
         """Publish every frame in and out on ``bus``, naming ``endpoint`` (as the plant does)."""
@@ -210,8 +211,17 @@ class ModbusServer:
         """Open transports served (TCP connections, or the one RTU line)."""
         return sum(not pump.transport.closed for pump in self.pumps.values())
 
+    def hold_pace(self) -> None:
+        """Keep the runner paced while this server is open (its line may hang up)."""
+        if not self._holding:
+            self._holding = True
+            self.runner.hold_pace(True)
+
     def close(self) -> None:
         """Stop listening and close every transport this server serves."""
+        if self._holding:
+            self._holding = False
+            self.runner.hold_pace(False)
         self.closed = True
         if self._listener is not None:
             self.runner.detach(self._listener)
@@ -260,6 +270,8 @@ def serve_rtu(
     line = RtuLine(devices, link, timing, wiring, wire)
     where = f"pty {transport.peer_path}" if transport.peer_path else transport.name
     server = ModbusServer(runner, "modbus-rtu", where, line.slaves, str(settings), timing=timing)
+    if transport.is_real:  # the run stays paced if the serial peer goes (issue 15 item 2)
+        server.hold_pace()
     _Pump(runner, transport, line, server, precise=wire is not None)
     return server
 
