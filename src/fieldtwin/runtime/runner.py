@@ -6,7 +6,8 @@ Three ways to run, chosen afresh on every cycle (attachments may change):
   transports are polled after each instant; ``advance`` with nothing attached
   is exactly ``clock.advance``.
 * **paced** - a real transport or listener is attached (or a server of a real
-  line holds the pace, ``hold_pace``) and ``speed`` is a number: simulated time follows the wall clock at ``speed`` (x1, x10, ...).
+  line holds the pace, ``hold_pace``) and ``speed`` is a number: simulated time
+  follows the wall clock at ``speed`` (x1, x10, ...).
   The runner sleeps only inside the wall's ``wait`` (selectors.select), until
   the next clock deadline mapped to wall time or until bytes arrive.  Bytes that
   arrive at wall time w are given the simulated time they arrived at; events due
