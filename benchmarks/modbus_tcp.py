@@ -7,19 +7,30 @@ concurrent connections it prints requests per second, p50 and p99 latency, and
 the ratio ours / pymodbus.  Bounded: DURATION_S per case.
 
     .venv/bin/python benchmarks/modbus_tcp.py [--duration 2.0]
+
+With ``--kit DIR`` (the neutral benchmark kit, ../shared/bench on the project's
+machine: a C load generator that does not starve the server on two cores) it
+runs that kit's compare.py instead, by path (never copied here): pymodbus 3.16,
+libmodbus when its anchor is built, and fieldtwin serving a TES 32EST, FC03 and
+FC16 x 10 words at 1 and 8 connections, alternated, medians and ratios against
+pymodbus.  It says so when the kit or its mbload binary is absent.
 """
 
 from __future__ import annotations
 
 import argparse
 import multiprocessing as mp
+import os
 import socket
 import statistics
+import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from multiprocessing.queues import Queue
+from pathlib import Path
 
 from pymodbus.datastore import ModbusDeviceContext, ModbusSequentialDataBlock, ModbusServerContext
 from pymodbus.server import StartTcpServer
@@ -165,7 +176,11 @@ def _run_case(
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--duration", type=float, default=2.0, help="seconds per case")
+    parser.add_argument("--kit", help="the shared benchmark kit's directory (compare.py, mbload)")
+    parser.add_argument("--reps", type=int, default=3, help="with --kit: repetitions")
     args = parser.parse_args()
+    if args.kit is not None:
+        raise SystemExit(_kit(Path(args.kit), args.duration, args.reps))
     mp.set_start_method("spawn", force=True)
     cases: dict[str, Callable[[Queue[int]], mp.Process]] = {
         "fieldtwin (table device)": lambda q: _with_server(_serve_ours, ("table", q)),
@@ -179,6 +194,37 @@ def main() -> None:
     cases["pymodbus 3.16 (static datastore)"] = lambda q: _with_server(_serve_pymodbus, (q,))
     results = {name: _run_case(name, make, args.duration) for name, make in cases.items()}
     _report(results, args.duration)
+
+
+def _kit(kit: Path, duration: float, reps: int) -> int:
+    """Run the kit's compare.py against pymodbus, libmodbus (if built) and fieldtwin."""
+    build = Path(os.environ.get("BENCH_BUILD", "/tmp/fieldtwin-bench"))
+    compare, mbload = kit / "compare.py", build / "mbload"
+    if not compare.is_file():
+        print(f"benchmark kit absent: no {compare}", file=sys.stderr)
+        return 1
+    if not mbload.is_file():
+        print(f"benchmark kit not built: no {mbload} (bash {kit}/build.sh)", file=sys.stderr)
+        return 1
+    venv = Path(sys.executable).parent
+    servers = [
+        f"pymodbus={sys.executable} {kit / 'anchor_pymodbus.py'} --port {{port}}",
+        f"fieldtwin=env FT={venv / 'fieldtwin'} {kit / 'fieldtwin_server.sh'} tcp {{port}}",
+    ]
+    anchor = build / "anchor_libmodbus"
+    if anchor.is_file():
+        servers.insert(1, f"libmodbus={anchor} --port {{port}}")
+    else:
+        print(f"libmodbus anchor not built ({anchor}): pymodbus only", file=sys.stderr)
+    command = [
+        sys.executable, str(compare), "--mode", "tcp", "--reps", str(reps), "--conns", "1,8",
+        "--fc", "3", "--fc", "16", "--addr", "37", "--duration", str(duration),
+        "--baseline", "pymodbus", "--mbload", str(mbload),
+        "--outdir", tempfile.mkdtemp(prefix="modbus_tcp_"),
+    ]  # fmt: skip
+    for server in servers:
+        command += ["--server", server]
+    return subprocess.run(command, cwd=kit, check=False, timeout=3600).returncode
 
 
 def _report(results: dict[str, dict[int, Figures]], duration: float) -> None:

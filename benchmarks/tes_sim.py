@@ -32,6 +32,21 @@ def main(argv: list[str]) -> int:
     for name, tes in cases:
         rate, events = _measure(tes, simulated)
         print(f"{name}: {rate:,.0f} simulated s per wall s ({events:,} events in {simulated:g} s)")
+    # the same-run baseline of issue 15: every channel judged after every sample
+    judged_all = Tes("TES 8EA")
+    for k in range(8):
+        judged_all.set_signal(k, Sine(5.0, 4.0, 1_000_000 * (k + 1)))
+    ai = judged_all.ai
+    ai._judge_sampled = lambda ch, now: ai.evaluate(now)  # type: ignore[method-assign]
+    rate_all, _ = _measure(judged_all, simulated)
+    fresh = Tes("TES 8EA")
+    for k in range(8):
+        fresh.set_signal(k, Sine(5.0, 4.0, 1_000_000 * (k + 1)))
+    rate_one, _ = _measure(fresh, simulated)
+    print(
+        f"TES 8EA, 8 sine inputs, sampled channel judged: {rate_one:,.0f} vs all channels"
+        f" judged: {rate_all:,.0f} simulated s per wall s ({rate_one / rate_all:.2f}x)"
+    )
     idle = Tes("TES 8EA")
     idle.set_input(0, 5.0)
     rate, events = _measure(idle, 3600.0)

@@ -21,7 +21,7 @@ from fieldtwin.modbus.model import Counter, LineFaultSource, Link, SlaveDevice
 from fieldtwin.modbus.pdu import request_length
 from fieldtwin.modbus.rtu import Fault, Frame, FramerEvent, RtuFramer
 from fieldtwin.modbus.slave import Outbox, SlaveSet, Transmission
-from fieldtwin.modbus.timing import RtuTiming
+from fieldtwin.modbus.timing import RtuTiming, WireTiming
 
 BAD_CRC = "bad_crc"
 BROKEN_CHARACTER = "broken_character"
@@ -39,15 +39,21 @@ class RtuLine:
 
     def __init__(
         self,
-        devices: Iterable[SlaveDevice],
+        devices: Iterable[SlaveDevice] | SlaveSet,
         link: Link,
         timing: RtuTiming,
         wiring: Wiring = Wiring.DOUBLE_PAIR,
+        wire: WireTiming | None = None,
     ) -> None:
-        self.slaves = SlaveSet(devices, link)
+        # one line, one set: the line-wide counters are counted once per frame
+        if isinstance(devices, SlaveSet):
+            self.slaves = devices
+        else:
+            self.slaves = SlaveSet(devices, link, shared_counts=True)
         self.link = link
         self.timing = timing
         self.wiring = wiring
+        self.wire = wire  # None: a reply leaves its answer delay after the frame
         self.framer = RtuFramer(timing, request_length)
         self._outbox = Outbox()
 
@@ -87,7 +93,10 @@ class RtuLine:
         reply = self.slaves.dispatch(frame.slave, frame.pdu, now)
         if reply is not None:
             data = with_crc(bytes((self.slaves.number_of(reply.device),)) + reply.pdu)
-            self._outbox.put(reply.at, data, reply.device)
+            at = reply.at
+            if self.wire is not None:  # a real endpoint: when the line would deliver it
+                at = self.wire.reply_at(frame.at, len(frame.data), len(data), reply.at - now)
+            self._outbox.put(at, data, reply.device)
 
     def _injected_fault(self, frame: Frame, now: int) -> bool:
         """A device asked for its next frame to be corrupted on the line."""

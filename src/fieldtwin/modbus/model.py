@@ -155,3 +155,26 @@ class LineFaultSource(Protocol):
     """
 
     def take_line_fault(self, link: Link) -> enum.Enum | None: ...
+
+
+# Counters every slave on an RTU line counts for every frame, whoever it is for.
+LINE_COUNTERS = frozenset(
+    (Counter.CRC_ERRORS, Counter.WRONG_CHARACTERS, Counter.GOOD_FRAMES, Counter.NO_SILENCE)
+)
+
+
+class LineTally:
+    """The line-wide counts of one line, counted once per frame (issue 15: no O(N) per
+    frame); a device that shares it adds what it counted since it joined."""
+
+    __slots__ = ("counts",)
+
+    def __init__(self) -> None:
+        self.counts: dict[Counter, int] = dict.fromkeys(LINE_COUNTERS, 0)
+
+
+@runtime_checkable
+class SharedLineCounts(Protocol):
+    """A device that reads the line-wide counters of ``link`` off a shared tally."""
+
+    def share_line_counts(self, link: Link, tally: LineTally) -> None: ...

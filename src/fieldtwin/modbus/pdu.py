@@ -9,6 +9,7 @@ Decoding a *response* (the master side, for tests and clients) raises
 
 from __future__ import annotations
 
+import struct
 from dataclasses import dataclass
 
 from fieldtwin.errors import ProtocolError
@@ -153,7 +154,7 @@ def _decode_multiple(fc: int, data: bytes) -> Request | Rejection:
     values = data[5:]
     if fc == WRITE_COILS:
         return WriteBits(address, _bytes_to_bits(values, count))
-    return WriteWords(address, tuple(_u16(values, 2 * i) for i in range(count)))
+    return WriteWords(address, struct.unpack(f">{count}H", values))
 
 
 def decode_request(pdu: bytes) -> Request | Rejection:
@@ -202,6 +203,25 @@ def encode_request(request: Request) -> bytes:
 # --- responses: encode (slave side) ------------------------------------------------
 
 
+_READ_HEAD = struct.Struct(">BB")
+_WRITE_ECHO = struct.Struct(">BHH")
+
+
+def _words(values: tuple[int, ...] | tuple[bool, ...]) -> bytes:
+    """Big-endian 16-bit words (struct.error if one is not 0..FFFFh)."""
+    return struct.pack(f">{len(values)}H", *values)
+
+
+def _echoable(request: WriteWords) -> bool:
+    """Values and address that ``encode_request`` would encode without an error."""
+    vs = request.values
+    return (
+        0 <= request.address <= 0xFFFF
+        and 0 < 2 * len(vs) <= 0xFF
+        and 0 <= min(vs) <= max(vs) <= 0xFFFF
+    )
+
+
 def encode_exception(function: int, code: int) -> bytes:
     """Exception response PDU: fc | 80h, code (AMB-TES-02)."""
     return bytes(((function | EXCEPTION_FLAG) & 0xFF, code & 0xFF))
@@ -217,6 +237,10 @@ def _encode_read_result(request: ReadBits | ReadWords, result: Result) -> bytes:
     if isinstance(request, ReadBits):
         body = _bits_to_bytes(tuple(bool(v) for v in result))
     else:
+        try:  # the fast path: words packed at once, the same bytes
+            return _READ_HEAD.pack(request.function, 2 * len(result)) + _words(result)
+        except struct.error:
+            pass  # not 16-bit words: the checks below name the bad result
         if not all(isinstance(v, int) and 0 <= v <= 0xFFFF for v in result):
             raise _bad_result(request, result)
         body = b"".join(int(v).to_bytes(2, "big") for v in result)
@@ -243,6 +267,8 @@ def encode_response(request: Request, result: Result) -> bytes:
     if result is not None:
         raise _bad_result(request, result)
     # TES 7.2.2 / 7.2.3 / 7.2.5: write replies echo address and value/quantity.
+    if isinstance(request, WriteWords) and _echoable(request):  # fast: values not encoded
+        return _WRITE_ECHO.pack(WRITE_REGISTERS, request.address, len(request.values))
     return encode_request(request)[:5]
 
 

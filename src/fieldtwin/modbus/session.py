@@ -29,6 +29,9 @@ class TcpSession:
         self.link = self.slaves.link
         self._decoder = MbapDecoder()
         self._outbox = Outbox()
+        # replies due at once while the outbox is empty (answer delay 0): they skip the
+        # outbox's heap; sent in the same order and at the same instant as through it
+        self._ready: list[Transmission] = []
         self.close_reason: str | None = None
 
     @property
@@ -44,16 +47,30 @@ class TcpSession:
         except ProtocolError as exc:
             self.close_reason = str(exc)
             self._outbox.clear()
+            self._ready.clear()
             return
         for frame in frames:
             self._frame(frame, now)
 
     def poll(self, now: int) -> list[Transmission]:
         """The replies due at or before ``now``."""
-        return [transmission for transmission, _ in self._outbox.due(now)]
+        ready = self._ready
+        if ready:
+            self._ready = []
+        if not self._outbox:
+            return ready
+        return ready + [transmission for transmission, _ in self._outbox.due(now)]
 
     def next_deadline(self) -> int | None:
+        if self._ready:
+            return self._ready[0].at  # never later than anything in the outbox
         return self._outbox.next_deadline()
+
+    def _put(self, at: int, data: bytes, now: int, device: SlaveDevice | None = None) -> None:
+        if at <= now and not self._outbox:
+            self._ready.append(Transmission(at, data))
+        else:
+            self._outbox.put(at, data, device)
 
     def _frame(self, frame: MbapFrame, now: int) -> None:
         if frame.protocol != MODBUS_PROTOCOL:
@@ -65,13 +82,13 @@ class TcpSession:
         device = self._target(frame.unit)
         if device is None:
             pdu = encode_exception(frame.pdu[0], GATEWAY_TARGET_FAILED)
-            self._outbox.put(now, encode_mbap(frame.transaction, frame.unit, pdu))
+            self._put(now, encode_mbap(frame.transaction, frame.unit, pdu), now)
             return
         device.count(self.link, Counter.GOOD_FRAMES, now)
         reply = self.slaves.answer(device, frame.pdu, now)
         if reply is not None:
             data = encode_mbap(frame.transaction, frame.unit, reply.pdu)
-            self._outbox.put(reply.at, data, device)
+            self._put(reply.at, data, now, device)
 
     def _target(self, unit: int) -> SlaveDevice | None:
         device = self.slaves.get(unit)

@@ -15,11 +15,14 @@ from dataclasses import dataclass, field
 
 from fieldtwin.errors import ConfigError
 from fieldtwin.modbus.model import (
+    LINE_COUNTERS,
     Counter,
     ExceptionCode,
+    LineTally,
     Link,
     NoReply,
     PerLinkSlave,
+    SharedLineCounts,
     SlaveDevice,
 )
 from fieldtwin.modbus.pdu import (
@@ -57,9 +60,15 @@ class Reply:
 class SlaveSet:
     """Several slave devices sharing one link, dispatched by slave number."""
 
-    def __init__(self, devices: Iterable[SlaveDevice], link: Link) -> None:
+    def __init__(
+        self, devices: Iterable[SlaveDevice], link: Link, shared_counts: bool = False
+    ) -> None:
         self.link = link
         self.devices: tuple[SlaveDevice, ...] = tuple(devices)
+        # shared_counts (an RTU line): the line-wide counters are counted once per frame
+        # on a tally the devices that can read it share; the others count one by one
+        self._tally: LineTally | None = None
+        self._counting: tuple[SlaveDevice, ...] = self.devices
         self._by_number: dict[int, SlaveDevice] = {}
         for device in self.devices:
             number = slave_number(device, link)
@@ -70,6 +79,12 @@ class SlaveSet:
             self._by_number[number] = device
         if not self.devices:
             raise ConfigError(f"no slave device on the {link.value} link")
+        if shared_counts:
+            tally = self._tally = LineTally()
+            for device in self.devices:
+                if isinstance(device, SharedLineCounts):
+                    device.share_line_counts(link, tally)
+            self._counting = tuple(d for d in self.devices if not isinstance(d, SharedLineCounts))
 
     @property
     def numbers(self) -> tuple[int, ...]:
@@ -80,7 +95,11 @@ class SlaveSet:
 
     def count_all(self, counter: Counter, now: int, times: int = 1) -> None:
         """Every device on the link saw ``times`` more of ``counter``."""
-        for device in self.devices:
+        devices = self.devices
+        if self._tally is not None and counter in LINE_COUNTERS:
+            self._tally.counts[counter] += times  # once, for every device sharing it
+            devices = self._counting
+        for device in devices:
             for _ in range(times):
                 device.count(self.link, counter, now)
 

@@ -84,6 +84,45 @@ TYPICAL_TR_US = 1500
 TYPICAL_TQ_US = 1500
 
 
+@dataclass(frozen=True, slots=True)
+class WireTiming:
+    """When a reply leaves a real endpoint: the instant a real line delivers its last
+    character (TES 7.2.7; issue 15 item 2; docs/modbus.md "Wire timing").
+
+    From the request's last byte as the twin reads it: the request's own Nq
+    characters (a pty or a TCP stream hands them over at once), the t3.5 silence
+    that ends it, the TES's turnaround ``tr`` (§7.2.7 "typically 1,5 ms"), the
+    answer delay (§3.1.3, with any ``late_answer`` fault), then the reply's Nr
+    characters.  ``carried``: the transport is a UART at the baud rate, which
+    has already taken the request's characters and will take the reply's
+    itself, so only the silence, tr and the delay are added.
+    """
+
+    char_us: Fraction
+    t35_us: int
+    turnaround_us: int = TYPICAL_TR_US
+    carried: bool = False
+
+    @classmethod
+    def from_format(cls, fmt: CharFormat, carried: bool = False) -> WireTiming:
+        ct = char_time(fmt)
+        return cls(ct, round(ct * 7 / 2), TYPICAL_TR_US, carried)
+
+    def reply_at(self, request_end: int, nq: int, nr: int, delay_us: int) -> int:
+        """When a reply of ``nr`` bytes to a request of ``nq`` bytes, read at
+        ``request_end``, is sent."""
+        gap = self.t35_us + self.turnaround_us + delay_us
+        if self.carried:
+            return request_end + gap
+        return request_end + round(self.char_us * (nq + nr)) + gap
+
+
+def reply_latency_us(fmt: CharFormat, nq: int, nr: int, delay_us: int = 0) -> int:
+    """A master's answer time on a wire-timed pty: from writing the request at once
+    to the reply's last character (T of §7.2.7 without Sr and the master's tq)."""
+    return WireTiming.from_format(fmt).reply_at(0, nq, nr, delay_us)
+
+
 def request_bytes(request: Request) -> int:
     """Nq of TES 7.2: bytes of the RTU request frame."""
     match request:

@@ -23,7 +23,7 @@ from fieldtwin.modbus.model import Link, SlaveDevice
 from fieldtwin.modbus.rtu import MAX_FRAME
 from fieldtwin.modbus.session import TcpSession
 from fieldtwin.modbus.slave import SlaveSet, Transmission
-from fieldtwin.modbus.timing import RtuTiming
+from fieldtwin.modbus.timing import RtuTiming, WireTiming
 from fieldtwin.runtime.events import EventBus
 from fieldtwin.runtime.runner import Runner
 from fieldtwin.runtime.wiretap import Stream, Wiretap
@@ -56,10 +56,15 @@ class _Pump:
         transport: Transport,
         core: Core,
         server: ModbusServer | None = None,
+        precise: bool = False,
     ) -> None:
         self.runner = runner
         self.transport = transport
         self.core = core
+        # a wire-timed line: while it has a deadline (a reply due), the runner's waits
+        # end on time to a fraction of a ms; not otherwise (precise waits cost naps)
+        self._wired = precise
+        self._precise = False
         self._timer: Handle | None = None
         self._server = server  # its open pumps: this one leaves them on close
         self._stream: Stream | None = None  # the wiretap's decoder, made when first observed
@@ -85,7 +90,13 @@ class _Pump:
     def on_close(self, now: int) -> None:
         self.close()
 
+    def _want_precise(self, on: bool) -> None:
+        if on is not self._precise:
+            self._precise = on
+            self.runner.want_precise_waits(on)
+
     def close(self) -> None:
+        self._want_precise(False)
         if self._server is not None:
             self._server.pumps.pop(id(self), None)
         if self._timer is not None:
@@ -118,6 +129,8 @@ class _Pump:
 
     def _rearm(self) -> None:
         deadline = self.core.next_deadline()
+        if self._wired:
+            self._want_precise(deadline is not None)
         timer = self._timer
         if timer is not None and timer.active and timer.time == deadline:
             return
@@ -145,6 +158,11 @@ def _max_lead(timing: RtuTiming) -> int:
     """A real line carries at most one longest frame beyond what the wall has seen
     (issue 10 item 5): more is a UART overrun (see modbus/rtu.py)."""
     return MAX_FRAME * timing.char_us
+
+
+def _carries_baud(transport: Transport) -> bool:
+    """A UART that sends at the baud rate itself (not a pty, whatever its path)."""
+    return bool(getattr(transport, "carries_baud", False))
 
 
 def _scaled(runner: Runner, floor_us: int) -> int:
@@ -176,6 +194,7 @@ class ModbusServer:
         self.closed = False
         self.wiretap: Wiretap | None = None
         self._timing = timing  # the RTU framing a wiretap copies (None: MBAP)
+        self._holding = False  # holds the runner's pace (a real RTU line)
 
     def tap(self, bus: EventBus, endpoint: str) -> None:
         """Publish every frame in and out on ``bus``, naming ``endpoint`` (as the plant does)."""
@@ -201,8 +220,17 @@ class ModbusServer:
             pump.close()
         return len(pumps)
 
+    def hold_pace(self) -> None:
+        """Keep the runner paced while this server is open (its line may hang up)."""
+        if not self._holding:
+            self._holding = True
+            self.runner.hold_pace(True)
+
     def close(self) -> None:
         """Stop listening and close every transport this server serves."""
+        if self._holding:
+            self._holding = False
+            self.runner.hold_pace(False)
         self.closed = True
         if self._listener is not None:
             self.runner.detach(self._listener)
@@ -233,16 +261,27 @@ def serve_rtu(
     link: Link,
     settings: LineSettings,
     wiring: Wiring = Wiring.DOUBLE_PAIR,
+    wire_timing: bool = True,
 ) -> ModbusServer:
-    """A Modbus RTU line on ``transport`` (pty, serial port or memory)."""
+    """A Modbus RTU line on ``transport`` (pty, serial port or memory).
+
+    ``wire_timing`` (real transports): each reply leaves when a real line would
+    deliver its last character (``WireTiming``); off, it leaves its answer delay
+    after the request's last byte was read (for throughput tests).
+    """
     timing = RtuTiming.from_format(settings)
+    wire = None
     if transport.is_real:
+        if wire_timing:
+            wire = WireTiming.from_format(settings, carried=_carries_baud(transport))
         floor = _scaled(runner, REAL_LINE_FLOOR_US)
         timing = timing.relaxed(floor, eager=True, max_lead_us=_max_lead(timing))
-    line = RtuLine(devices, link, timing, wiring)
+    line = RtuLine(devices, link, timing, wiring, wire)
     where = f"pty {transport.peer_path}" if transport.peer_path else transport.name
     server = ModbusServer(runner, "modbus-rtu", where, line.slaves, str(settings), timing=timing)
-    _Pump(runner, transport, line, server)
+    if transport.is_real:  # the run stays paced if the serial peer goes (issue 15 item 2)
+        server.hold_pace()
+    _Pump(runner, transport, line, server, precise=wire is not None)
     return server
 
 
@@ -253,11 +292,17 @@ def serve_rtu_over_tcp(
     settings: LineSettings,
     link: Link = Link.RS485,
     wiring: Wiring = Wiring.DOUBLE_PAIR,
+    wire_timing: bool = True,
 ) -> ModbusServer:
-    """RTU frames inside TCP connections (a serial-to-Ethernet gateway in front of a line)."""
+    """RTU frames inside TCP connections (a serial-to-Ethernet gateway in front of a line).
+
+    ``wire_timing``: as for ``serve_rtu`` (the stream carries no baud rate).
+    """
     devices = tuple(devices)
-    slaves = SlaveSet(devices, link)
+    # every connection is one more master on the same line: one set, one line-wide tally
+    slaves = SlaveSet(devices, link, shared_counts=True)
     timing = RtuTiming.from_format(settings)
+    wire = WireTiming.from_format(settings) if wire_timing else None
     floor = _scaled(runner, TCP_STREAM_FLOOR_US)
     timing = timing.relaxed(floor, eager=True, max_lead_us=_max_lead(timing))
     where = url_of("rtu+tcp", listener)
@@ -266,7 +311,8 @@ def serve_rtu_over_tcp(
     )
 
     def on_connect(transport: Transport, now: int) -> None:
-        _Pump(runner, transport, RtuLine(devices, link, timing, wiring), server)
+        line = RtuLine(slaves, link, timing, wiring, wire)
+        _Pump(runner, transport, line, server, precise=wire is not None)
 
     runner.attach_listener(listener, on_connect)
     return server

@@ -5,8 +5,9 @@ Three ways to run, chosen afresh on every cycle (attachments may change):
 * **free** - no real descriptor attached: events run back to back, memory
   transports are polled after each instant; ``advance`` with nothing attached
   is exactly ``clock.advance``.
-* **paced** - a real transport or listener is attached and ``speed`` is a
-  number: simulated time follows the wall clock at ``speed`` (x1, x10, ...).
+* **paced** - a real transport or listener is attached (or a server of a real
+  line holds the pace, ``hold_pace``) and ``speed`` is a number: simulated time
+  follows the wall clock at ``speed`` (x1, x10, ...).
   The runner sleeps only inside the wall's ``wait`` (selectors.select), until
   the next clock deadline mapped to wall time or until bytes arrive.  Bytes that
   arrive at wall time w are given the simulated time they arrived at; events due
@@ -153,6 +154,7 @@ class Runner:
         self._depth = 0  # nested _run calls (a command that runs the clock)
         self._paces: list[_Pace] = []  # the pace of every run in progress, outermost first
         self.tap: AttachTap | None = None  # a recording: sees every attachment (set_tap)
+        self._pace_holders = 0  # servers of real lines that keep the run paced (hold_pace)
 
     # ----------------------------------------------------------------- attachments
 
@@ -255,10 +257,29 @@ class Runner:
         self._forget(link.fd, link)
         self._closed.append(link)
 
+    # -- precise waits (issue 15 item 2: wire-timed RTU replies; docs/modbus.md)
+
+    def want_precise_waits(self, on: bool) -> None:
+        """A core whose deadlines must be met to a fraction of a millisecond on the wall
+        (``on``), or that no longer needs it; a wall without the ability ignores it."""
+        want = getattr(self._wall, "want_precision", None)
+        if want is not None:
+            want(on)
+
+    # -- pace holders (issue 15 item 2: a serial peer that closes does not end the pacing)
+
+    def hold_pace(self, on: bool) -> None:
+        """A server of a real line (``on``) keeps the run paced at ``speed`` while it is
+        open, even once its transport has gone (a serial peer that closed)."""
+        self._pace_holders = max(0, self._pace_holders + (1 if on else -1))
+
     @property
     def paced(self) -> bool:
-        """True while a real transport or a listener is attached and speed is a number."""
-        return self.speed is not None and (self._real > 0 or bool(self._listeners))
+        """True while a real transport, a listener or a pace holder is there and speed
+        is a number."""
+        if self.speed is None:
+            return False
+        return self._real > 0 or bool(self._listeners) or self._pace_holders > 0
 
     @property
     def watched(self) -> int:

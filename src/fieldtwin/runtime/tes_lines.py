@@ -56,15 +56,18 @@ def serve_group(
         tcp_link = Link.RS232 if link is Link.RS232 else Link.TCP
         return serve_tcp(runner, listen(endpoint.host, endpoint.port), devices, tcp_link)
     settings = line_settings(endpoint, devices, link)
+    # the plant checked that every TES of one line has the same ``wire_timing``
+    wire = all(tes.wire_timing for tes in devices)
     if endpoint.scheme == "rtu+tcp":
         assert endpoint.host is not None and endpoint.port is not None
         listener = listen(endpoint.host, endpoint.port)
-        return serve_rtu_over_tcp(runner, listener, devices, settings, link)
+        return serve_rtu_over_tcp(runner, listener, devices, settings, link, wire_timing=wire)
     if endpoint.scheme == "pty":
-        return serve_rtu(runner, open_pty(settings), devices, link, settings)
+        return serve_rtu(runner, open_pty(settings), devices, link, settings, wire_timing=wire)
     if endpoint.scheme == "serial":
         assert endpoint.device is not None
-        return serve_rtu(runner, open_serial(endpoint.device, settings), devices, link, settings)
+        transport = open_serial(endpoint.device, settings)
+        return serve_rtu(runner, transport, devices, link, settings, wire_timing=wire)
     raise ConfigError(
         f"endpoint {endpoint}: cannot serve TES there (allowed: tcp, rtu+tcp, pty, serial)"
     )

@@ -13,12 +13,20 @@ writing (while output is queued for it), for both, or forgotten.
 
 from __future__ import annotations
 
+import math
 import selectors
 import time
 from collections.abc import Collection
 from typing import Protocol
 
 Ready = tuple[Collection[int], Collection[int]]  # (readable fds, writable fds)
+
+# Issue 15 item 2: epoll (selectors) rounds every timeout up to whole milliseconds, so a
+# reply due in 0.3 ms would leave 1 ms late.  A precise wait sleeps in whole ms up to
+# PRECISE_SPIN_S before its end, then polls every PRECISE_NAP_S until the end (bounded:
+# at most PRECISE_SPIN_S plus the kernel's one-millisecond rounding).
+PRECISE_SPIN_S = 0.0015
+PRECISE_NAP_S = 0.0001  # a nap between two polls: never a busy loop holding the GIL
 
 
 class WallClock(Protocol):
@@ -52,6 +60,7 @@ class SystemWall:
     def __init__(self) -> None:
         self._selector: selectors.BaseSelector = selectors.DefaultSelector()
         self._events: dict[int, int] = {}
+        self._precise = 0  # how many users want precise waits (want_precision)
 
     def monotonic(self) -> float:
         return time.monotonic()
@@ -79,12 +88,40 @@ class SystemWall:
         """How many descriptors are registered."""
         return len(self._events)
 
+    def want_precision(self, on: bool) -> None:
+        """A user (a wire-timed RTU line) needs waits that end on time to a fraction of a
+        millisecond (``on``), or no longer does; precise waits cost a short poll loop."""
+        self._precise = max(0, self._precise + (1 if on else -1))
+
+    @property
+    def precise(self) -> bool:
+        return self._precise > 0
+
     def wait(self, timeout: float | None) -> Ready:
         if not self._events:
             # selectors raise on an empty epoll set with no timeout; sleep instead
             if timeout:
-                time.sleep(timeout)
+                time.sleep(timeout)  # clock_nanosleep: not rounded to whole ms
             return (), ()
+        if self._precise and timeout is not None and timeout > 0:
+            return self._precise_wait(timeout)
+        return self._select(timeout)
+
+    def _precise_wait(self, timeout: float) -> Ready:
+        end = time.monotonic() + timeout
+        coarse_ms = math.floor((timeout - PRECISE_SPIN_S) * 1000)
+        if coarse_ms > 0:
+            ready = self._select(coarse_ms / 1000)
+            if ready[0] or ready[1]:
+                return ready
+        while True:  # the last < 2.5 ms: poll, napping PRECISE_NAP_S (other threads run)
+            ready = self._select(0)
+            left = end - time.monotonic()
+            if ready[0] or ready[1] or left <= 0:
+                return ready
+            time.sleep(min(left, PRECISE_NAP_S))  # clock_nanosleep: not rounded to ms
+
+    def _select(self, timeout: float | None) -> Ready:
         readable: list[int] = []
         writable: list[int] = []
         for key, mask in self._selector.select(timeout):

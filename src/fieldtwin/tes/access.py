@@ -10,7 +10,7 @@ and every writable kind a writer, in two tables checked complete at import.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 
 from fieldtwin.errors import ProtocolError
 from fieldtwin.tes import state
@@ -56,6 +56,27 @@ class RegisterFile:
             self.di.restore_memorized(reg.index)  # AMB-TES-12: shows in this reply
         return self.peek(reg, now)
 
+    def get_words(self, regs: Sequence[Register], now: int) -> tuple[int, ...]:
+        """Master reads of consecutive words, in order: ``get`` of each, the 32-bit value
+        of a pair computed once for its two words (value32 has no side effect)."""
+        out: list[int] = []
+        last: tuple[Kind, int] | None = None
+        value = 0
+        inputs = self.model.digital_inputs
+        for reg in regs:
+            kind = reg.kind
+            if kind not in PAIRS:
+                out.append(self.get(reg, now))
+                continue
+            i, low = divmod(reg.index, 2)
+            if i >= inputs:
+                out.append(0)  # AMB-TES-13: inputs the model does not have read 0
+                continue
+            if last != (kind, i):
+                last, value = (kind, i), self.di.value32(_PAIR_NAMES[kind], i, now)
+            out.append((value if low else value >> 16) & 0xFFFF)
+        return tuple(out)
+
     def status_word(self) -> int:
         word = self.ram.status
         if self.model.digital_inputs and self.di.changes_pending:
@@ -75,7 +96,7 @@ class RegisterFile:
         i, low = divmod(index, 2)
         if i >= self.model.digital_inputs:
             return 0  # AMB-TES-13: inputs the model does not have read 0
-        value = self.di.value32(kind.value, i, now)
+        value = self.di.value32(_PAIR_NAMES[kind], i, now)
         return value & 0xFFFF if low else value >> 16
 
     def wiring_bits(self, wiring: Wiring | None, word: int) -> int:
@@ -114,6 +135,26 @@ class RegisterFile:
             )
         writer(self, reg, value, now)
 
+    def put_words(self, regs: Sequence[Register], values: Sequence[int], now: int) -> None:
+        """Master writes of consecutive checked writable words, in order: ``put`` of each,
+        the two words of a 32-bit pair set at once (what writing them one by one leaves:
+        a pair reads back what was written)."""
+        inputs = self.model.digital_inputs
+        count, j = len(regs), 0
+        while j < count:
+            reg, kind = regs[j], regs[j].kind
+            if kind in PAIRS and j + 1 < count and not reg.index & 1:
+                after = regs[j + 1]
+                if after.kind is kind and after.index == reg.index + 1:
+                    i = reg.index >> 1
+                    if i < inputs:  # AMB-TES-13: inputs the model lacks ignore writes
+                        value = (values[j] << 16) | values[j + 1]
+                        self.di.set_value32(_PAIR_NAMES[kind], i, value, now)
+                    j += 2
+                    continue
+            self.put(reg, values[j], now)
+            j += 1
+
     def put_command(self, i: int, value: int) -> None:
         do = self.do
         if self.model.is_analog:
@@ -145,6 +186,7 @@ def _splice(mask: int, word: int, value: int) -> int:
 # --- the kind tables ---------------------------------------------------------
 
 Reader = Callable[[RegisterFile, Register, int], int]
+_PAIR_NAMES = {kind: kind.value for kind in PAIRS}  # an Enum's .value is a slow property
 Writer = Callable[[RegisterFile, Register, int, int], None]
 
 
@@ -174,8 +216,8 @@ _READERS: dict[Kind, Reader] = {
     Kind.CHANNEL_STATE: lambda rf, reg, now: rf.channel_state(reg.index),
     Kind.ANALOG_OUTPUT: _word,
     Kind.HISTORY: lambda rf, reg, now: rf.ai.history(reg.index // 120, reg.index % 120),
-    Kind.DIAG_RS485: lambda rf, reg, now: rf.ram.counters["rs485"].values[reg.index],
-    Kind.DIAG_RS232: lambda rf, reg, now: rf.ram.counters["rs232"].values[reg.index],
+    Kind.DIAG_RS485: lambda rf, reg, now: rf.ram.counters["rs485"].value(reg.index),
+    Kind.DIAG_RS232: lambda rf, reg, now: rf.ram.counters["rs232"].value(reg.index),
     Kind.SC: lambda rf, reg, now: rf.wiring_bits(Wiring.SHORT, reg.index),
     Kind.OC: lambda rf, reg, now: rf.wiring_bits(Wiring.OPEN, reg.index),
     Kind.FAULT: lambda rf, reg, now: rf.wiring_bits(None, reg.index),
@@ -193,7 +235,7 @@ def _put_blink_select(rf: RegisterFile, reg: Register, value: int, now: int) -> 
 
 
 def _put_diag(rf: RegisterFile, reg: Register, value: int, now: int) -> None:
-    rf.ram.counters[reg.kind.value[5:]].values[reg.index] = value
+    rf.ram.counters[reg.kind.value[5:]].set(reg.index, value)
 
 
 def _put_analog_output(rf: RegisterFile, reg: Register, value: int, now: int) -> None:

@@ -140,7 +140,7 @@ class AnalogInputs:
         # §4.2.3 average of the last N samples (AMB-TES-16: of those available at start)
         ch.value = self._scale(ch.number, sum(ch.samples) / len(ch.samples))
         ch.acquired = True
-        self.evaluate(now)
+        self._judge_sampled(ch, now)
         settled = len(ch.samples) == size and all(s == point for s in ch.samples)
         # a signal may vary smoothly with no breakpoint (a sine): only a level settles
         constant = ch.signal is None or isinstance(ch.signal, Constant)
@@ -159,18 +159,28 @@ class AnalogInputs:
     # --- thresholds (§4.2.6) -----------------------------------------------
 
     def evaluate(self, now: int) -> None:
-        """Recompute threshold bits and reflex outputs of every acquired channel."""
+        """Recompute threshold bits and reflex outputs of every acquired channel
+        (after a master write of a threshold, an output or the polarity)."""
         for ch in self.channels.values():
-            if not ch.acquired:
-                continue
-            k = ch.number
-            ch.low = ch.value < to_signed(self._word(0x023 + k))
-            ch.high = ch.value > to_signed(self._word(0x02B + k))
-            if ch.high:
-                ch.hysteresis = True  # §4.2.6.2 set above the high threshold
-            elif ch.low:
-                ch.hysteresis = False  # ... reset under the low threshold
+            if ch.acquired:
+                self._judge(ch)
         self._on_evaluate(now)
+
+    def _judge_sampled(self, ch: _Channel, now: int) -> None:
+        """After a sample: only ``ch`` changed.  Every other channel's bits are those of
+        its last judgement (its value and the thresholds are unchanged since: a
+        threshold write runs ``evaluate``), and judging again leaves them as they are."""
+        self._judge(ch)
+        self._on_evaluate(now)
+
+    def _judge(self, ch: _Channel) -> None:
+        k = ch.number
+        ch.low = ch.value < to_signed(self._word(0x023 + k))
+        ch.high = ch.value > to_signed(self._word(0x02B + k))
+        if ch.high:
+            ch.hysteresis = True  # §4.2.6.2 set above the high threshold
+        elif ch.low:
+            ch.hysteresis = False  # ... reset under the low threshold
 
     def reflex(self) -> dict[int, bool]:
         """Output number -> threshold state, before polarity (AMB-TES-20/21)."""

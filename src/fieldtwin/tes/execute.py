@@ -14,7 +14,7 @@ the wire take the same path.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 
 from fieldtwin.modbus.model import (
     NO_REPLY,
@@ -38,6 +38,16 @@ from fieldtwin.tes.memmap import Register, coherent_from
 NOT_READY = ExceptionCode.SLAVE_DEVICE_FAILURE  # code 4, "slave not ready"
 BAD_ADDRESS = ExceptionCode.ILLEGAL_DATA_ADDRESS
 _READS = (ReadBits, ReadWords, ReadExceptionStatus)
+SPAN_CACHE = 64  # spans remembered per TES (the map is fixed per model)
+
+
+def _span_of(
+    table: Mapping[int, Register], first: int, count: int, writing: bool
+) -> tuple[Register, ...] | None:
+    regs = [table.get(a) for a in range(first, first + count)]
+    if any(r is None or (writing and not r.access.writable) for r in regs):
+        return None
+    return tuple(r for r in regs if r is not None)
 
 
 class SlaveAdapter:
@@ -56,6 +66,8 @@ class SlaveAdapter:
         self._faults = faults
         self._master_request = master_request
         self._coherent_from = coherent_from(self.model)
+        # (first, count, writing) -> the registers of a valid span, or None
+        self._spans: dict[tuple[int, int, bool], tuple[Register, ...] | None] = {}
 
     # --- SlaveDevice -------------------------------------------------------
 
@@ -93,15 +105,20 @@ class SlaveAdapter:
             return self._write_bits(request.address, (request.value,), link, now)
         return self._write_bits(request.address, request.values, link, now)
 
-    def _span(self, first: int, count: int, limit: int, writing: bool) -> list[Register] | None:
+    def _span(self, first: int, count: int, limit: int, writing: bool) -> Sequence[Register] | None:
         if not 1 <= count <= limit:
             return None
-        regs = [self.registers.table.get(a) for a in range(first, first + count)]
-        if any(r is None or (writing and not r.access.writable) for r in regs):
-            return None
-        return [r for r in regs if r is not None]
+        key = (first, count, writing)
+        spans = self._spans
+        regs = spans.get(key)
+        if regs is None:
+            regs = _span_of(self.registers.table, first, count, writing)
+            if len(spans) >= SPAN_CACHE:
+                spans.clear()  # bounded: a master polls a few spans over and over
+            spans[key] = regs
+        return regs
 
-    def _busy(self, regs: list[Register], link: Link, now: int) -> bool:
+    def _busy(self, regs: Sequence[Register], link: Link, now: int) -> bool:
         if regs[-1].address < self._coherent_from:
             return False
         faults = self._faults
@@ -120,7 +137,7 @@ class SlaveAdapter:
             return BAD_ADDRESS
         if self._busy(regs, link, now):
             return NOT_READY
-        return tuple(self.registers.get(r, now) for r in regs)
+        return self.registers.get_words(regs, now)
 
     def _read_bits(self, request: ReadBits, link: Link, now: int) -> Result:
         if request.function not in (1, 2):
@@ -143,8 +160,7 @@ class SlaveAdapter:
             return BAD_ADDRESS
         if self._busy(regs, link, now):
             return NOT_READY
-        for reg, value in zip(regs, values, strict=True):
-            self.registers.put(reg, value & 0xFFFF, now)
+        self.registers.put_words(regs, [value & 0xFFFF for value in values], now)
         return None
 
     def _write_bits(self, first: int, values: tuple[bool, ...], link: Link, now: int) -> Result:

@@ -23,7 +23,7 @@ from typing import cast
 
 from fieldtwin.clock import MS, S, SimClock, seconds
 from fieldtwin.errors import ConfigError
-from fieldtwin.modbus.model import Counter, Link, Request, Result
+from fieldtwin.modbus.model import Counter, LineTally, Link, Request, Result
 from fieldtwin.signals import Constant
 from fieldtwin.tes import state
 from fieldtwin.tes.access import RegisterFile
@@ -67,6 +67,9 @@ class Tes:
     ) -> None:
         self.model = model if isinstance(model, TesModel) else model_named(model)
         self.link = link  # the port this TES is reached on: ``slave`` is its number there
+        # on a real RTU endpoint, replies leave when a real line would deliver them
+        # (TES 7.2.7, docs/modbus.md "Wire timing"); the plant key ``wire_timing``
+        self.wire_timing = True
         self.clock = clock if clock is not None else SimClock()
         self.name = name or f"{self.model.name} #{slave or 1}"
         self.prm_jumper = prm_jumper
@@ -90,6 +93,8 @@ class Tes:
             self.model, self.line_faults, link, self.di, self.set_wiring, self
         )
         self._drivers: dict[int, DiscreteDriver] = {}
+        # the line-wide counts of the RTU line on each port (issue 15: once per frame)
+        self._tallies: dict[str, LineTally] = {}
         self._boot(self._init_eeprom(slave))
 
     # --- EEPROM ------------------------------------------------------------
@@ -140,6 +145,8 @@ class Tes:
         ram.words = mp_image(self.model, ram.params)
         ram.status = state.POWER_ON
         ram.counters = {"rs485": state.LinkCounters(), "rs232": state.LinkCounters()}
+        for key, tally in self._tallies.items():  # RAM lost: counting starts at 0 again
+            ram.counters[key].share(tally)
         ram.ao_fallback = 0
         ram.wdg_blinking = False
         self.di.power_on(now)
@@ -227,6 +234,13 @@ class Tes:
 
     def count(self, link: Link, counter: Counter, now: int) -> None:
         self.ram.counters[state.link_key(link)].bump(counter)
+
+    def share_line_counts(self, link: Link, tally: LineTally) -> None:
+        """The RTU line counts its line-wide counters (§6.2.3.2 01Ah-01Dh) once per frame
+        on ``tally``; this TES adds them to its own (SharedLineCounts)."""
+        key = state.link_key(link)
+        self._tallies[key] = tally
+        self.ram.counters[key].share(tally)
 
     def take_line_fault(self, link: Link) -> state.LineFault | None:
         """The RTU line calls this once per frame it delivers to this TES."""

@@ -8,6 +8,7 @@
     store = "eeprom.db"                    # SQLite parameter store (default: in memory)
     prm_jumper = false                     # true: factory settings, slave 1 (§3.1.2)
     link = "rs485"                         # which TES port the endpoint is (rs485, rs232)
+    wire_timing = true                     # RTU on pty/serial/rtu+tcp: replies at line speed
     inputs = { 0 = true, a2 = 4.5, a3 = { kind = "square", low = 1.0, high = 9.0, period_s = 2 } }
     faults = { short = [3], open = [7], not_ready_ms = 2, powered = true }
 
@@ -29,7 +30,18 @@ from fieldtwin.tes.model import Tes
 from fieldtwin.tes.models import model_named
 from fieldtwin.tes.port import check_fixed_format
 
-KEYS = ("model", "slave", "endpoint", "name", "store", "prm_jumper", "link", "inputs", "faults")
+KEYS = (
+    "model",
+    "slave",
+    "endpoint",
+    "name",
+    "store",
+    "prm_jumper",
+    "link",
+    "wire_timing",
+    "inputs",
+    "faults",
+)
 FAULT_KEYS = ("short", "open", "not_ready_ms", "powered")
 LINKS = {"rs485": Link.RS485, "rs232": Link.RS232}
 
@@ -69,11 +81,13 @@ def build_one(
     name = table.get("name")
     if name is not None and not isinstance(name, str):
         raise ConfigError(f"{at}.name: {name!r} is not a string")
+    wire = wire_timing_of(table, at)
     path = None if store is None else base_dir / store
     try:
         tes = Tes(model, slave, clock=clock, store=path, prm_jumper=prm, name=name, link=link)
     except ConfigError as exc:
         raise ConfigError(f"{at}: {exc}") from None
+    tes.wire_timing = wire
     if signals:
         _inputs(tes, table.get("inputs", {}), f"{at}.inputs", base_dir)
     faults = table.get("faults", {})
@@ -181,6 +195,14 @@ def _int_list(value: object, at: str) -> list[int]:
     return list(value)
 
 
+def wire_timing_of(table: Mapping[str, Any], at: str) -> bool:
+    """``wire_timing``: true (the default) or false."""
+    wire = table.get("wire_timing", True)
+    if not isinstance(wire, bool):
+        raise ConfigError(f"{at}.wire_timing: {wire!r} not allowed (allowed: true, false)")
+    return wire
+
+
 def check_lines(built: list[Tes], tables: Sequence[Mapping[str, Any]], where: str) -> None:
     """Two TES answering the same number on one line would both reply."""
     seen: dict[tuple[str, int], int] = {}
@@ -192,6 +214,12 @@ def check_lines(built: list[Tes], tables: Sequence[Mapping[str, Any]], where: st
             raise ConfigError(
                 f"{where}: tes[{i}].link: {link.value} on {url}, where tes[{first}] is on"
                 f" {link_of(tables[first], '').value} (one endpoint is one line)"
+            )
+        wire, first_wire = wire_timing_of(table, ""), wire_timing_of(tables[first], "")
+        if wire is not first_wire:  # one line has one timing
+            raise ConfigError(
+                f"{where}: tes[{i}].wire_timing: {str(wire).lower()} on {url}, where"
+                f" tes[{first}] has {str(first_wire).lower()} (one endpoint is one line)"
             )
         key = (url, tes.slave_for(link))
         if key in seen:

@@ -8,7 +8,7 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass, field
 
-from fieldtwin.modbus.model import Counter, Link
+from fieldtwin.modbus.model import LINE_COUNTERS, Counter, LineTally, Link
 from fieldtwin.tes.models import Family
 from fieldtwin.tes.params import Value
 
@@ -35,6 +35,7 @@ COUNTER_ORDER = (
     Counter.GOOD_FRAMES,
     Counter.NO_SILENCE,
 )
+_COUNTER_INDEX = {counter: i for i, counter in enumerate(COUNTER_ORDER)}
 
 
 def link_key(link: Link) -> str:
@@ -51,17 +52,48 @@ class LineFault(enum.Enum):
 
 @dataclass(slots=True)
 class LinkCounters:
-    """§6.2.3.2 diagnosis counters of one link (16-bit, wrapping)."""
+    """§6.2.3.2 diagnosis counters of one link (16-bit, wrapping).
+
+    ``values`` holds what this TES counted itself; a line-wide counter of a line it
+    shares a tally with (``LineTally``) adds what the line counted since
+    ``base`` (when it joined, powered on or the master wrote the word).  Read
+    them with ``value``, write them with ``set``.
+    """
 
     values: list[int] = field(default_factory=lambda: [0] * len(COUNTER_ORDER))
     not_ready_owed: bool = False  # the last answer was "not ready": count it as such
+    tally: LineTally | None = None
+    base: dict[Counter, int] = field(default_factory=dict)
+
+    def share(self, tally: LineTally) -> None:
+        """Count the line-wide counters off ``tally`` from now on (what an earlier
+        tally counted is kept)."""
+        if self.tally is not None:
+            self.values = [self.value(i) for i in range(len(self.values))]
+        self.tally, self.base = tally, dict(tally.counts)
+
+    def value(self, i: int) -> int:
+        tally = self.tally
+        if tally is None:
+            return self.values[i]
+        counter = COUNTER_ORDER[i]
+        if counter not in LINE_COUNTERS:
+            return self.values[i]
+        return (self.values[i] + tally.counts[counter] - self.base[counter]) & 0xFFFF
+
+    def set(self, i: int, value: int) -> None:
+        """A master write of counter word ``i``."""
+        self.values[i] = value
+        counter = COUNTER_ORDER[i]
+        if self.tally is not None and counter in LINE_COUNTERS:
+            self.base[counter] = self.tally.counts[counter]
 
     def bump(self, counter: Counter) -> None:
         if counter is Counter.EXCEPTION_REPLIES and self.not_ready_owed:
             counter = Counter.NOT_READY_REPLIES
         if counter in (Counter.EXCEPTION_REPLIES, Counter.NOT_READY_REPLIES):
             self.not_ready_owed = False
-        i = COUNTER_ORDER.index(counter)
+        i = _COUNTER_INDEX[counter]
         self.values[i] = (self.values[i] + 1) & 0xFFFF
 
 

@@ -46,6 +46,8 @@ class SerialTransport(FdTransport):
         except (pyserial.SerialException, OSError, ValueError) as exc:
             raise TransportError(f"cannot open serial device {device!r}: {exc}") from exc
         self._fd: int | None = self._port_fd()
+        # a pty opened as a serial device carries no baud rate (issue 15 item 2)
+        self.carries_baud = self._fd is None or not _is_pty(self._fd)
 
     @property
     def port(self) -> pyserial.Serial:
@@ -81,6 +83,17 @@ class SerialTransport(FdTransport):
 
     def _release(self) -> None:
         self._port.close()
+
+
+# Linux: Unix 98 pty slaves have major numbers 136..143 (Documentation/admin-guide/devices.txt)
+_PTY_MAJORS = range(136, 144)
+
+
+def _is_pty(fd: int) -> bool:
+    try:
+        return os.major(os.fstat(fd).st_rdev) in _PTY_MAJORS
+    except OSError:
+        return False
 
 
 def open_serial(device: str, settings: LineSettings | None = None) -> SerialTransport:
