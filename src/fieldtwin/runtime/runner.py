@@ -17,7 +17,13 @@ Three ways to run, chosen afresh on every cycle (attachments may change):
   back with a zero-timeout poll of the descriptors between instants; when no
   event is due before the end, the runner blocks for data and simulated time
   follows the wall clock at x1 while it waits (so a limit of n simulated
-  seconds is also at most n wall seconds of waiting).
+  seconds is also at most n wall seconds of waiting).  A wall may ask for
+  fewer polls while events run (its ``fast_poll_s``; the system wall's is
+  FAST_POLL_S): the descriptors are then polled between two instants only
+  once that much wall time has passed since the last poll, and bytes that
+  arrived meanwhile are given the instant of the poll that finds them, as
+  always (at most ``fast_poll_s`` of wall time after they arrived).  Other
+  walls (the tests') have none: a poll between every two instants.
 
 ``run_forever``'s ticks are not clock events: they never keep the clock busy.
 With nothing scheduled and no end, the runner waits on the wall (time follows
@@ -133,6 +139,9 @@ class Runner:
         self.speed = speed
         self.report: Report = report or _to_stderr
         self._wall: WallClock = wall or SystemWall()
+        # fast mode: the least wall time between two polls while events run (0: every instant)
+        self._fast_poll: float = getattr(self._wall, "fast_poll_s", 0.0)
+        self._next_poll = float("-inf")  # wall time of the next such poll
         self._links: dict[int, _Link] = {}  # id(transport) -> link
         self._listeners: dict[int, _Accepting] = {}  # id(listener) -> entry
         self._by_fd: dict[int, _Link | _Accepting] = {}
@@ -491,6 +500,13 @@ class Runner:
     def _fast_step(self, target: int | None, end: int | None, busy: bool) -> None:
         wall = self._wall
         if busy:
+            if self._fast_poll:
+                now_wall = wall.monotonic()
+                if now_wall < self._next_poll:  # polled less than fast_poll_s ago
+                    if target is not None:
+                        self._settle(target)
+                    return
+                self._next_poll = now_wall + self._fast_poll
             ready = self._handle(wall.wait(0))
             if ready:
                 self._deliver(ready)  # arrived while the clock stood at now

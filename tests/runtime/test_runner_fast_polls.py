@@ -1,0 +1,83 @@
+"""Issue 13: at ``--speed max`` a wall with ``fast_poll_s`` is polled between two
+instants only once that much wall time has passed since the last poll; bytes that
+arrived meanwhile get the instant of the poll that finds them.  Walls without it
+(the tests' FakeWall) are polled between every two instants (test_runner_pacing)."""
+
+from __future__ import annotations
+
+from fieldtwin.clock import MS, S, SimClock
+from fieldtwin.runtime.runner import Runner
+from fieldtwin.runtime.wall import FAST_POLL_S, SystemWall
+from tests.runtime.fake_wall import START, FakeLine, FakeWall
+
+Log = list[tuple[str, int]]
+
+
+class SlowPollWall(FakeWall):
+    fast_poll_s = 0.001
+
+
+def _setup() -> tuple[SimClock, SlowPollWall, Runner, FakeLine, Log]:
+    clock = SimClock()
+    wall = SlowPollWall()
+    runner = Runner(clock, None, wall=wall)
+    line = FakeLine(fd=10)
+    log: Log = []
+    runner.attach(line, lambda data, now: log.append((data.decode(), now)))
+    return clock, wall, runner, line, log
+
+
+def _busy(clock: SimClock, wall: SlowPollWall, log: Log, count: int, spend: float) -> None:
+    """``count`` events 1 ms apart, each taking ``spend`` s of wall time."""
+
+    def event(now: int) -> None:
+        log.append(("event", now))
+        wall.spend(spend)
+
+    for i in range(1, count + 1):
+        clock.schedule(i * MS, event)
+
+
+def test_the_system_wall_asks_for_fewer_polls() -> None:
+    wall = SystemWall()
+    try:
+        assert wall.fast_poll_s == FAST_POLL_S > 0
+    finally:
+        wall.close()
+
+
+def test_no_wall_time_passing_means_one_poll() -> None:
+    clock, wall, runner, _, log = _setup()
+    _busy(clock, wall, log, 5, 0.0)
+    runner.advance(S)
+    assert wall.waits[0] == 0 and wall.waits.count(0) == 1  # the first instant only
+    assert [now for _, now in log] == [1 * MS, 2 * MS, 3 * MS, 4 * MS, 5 * MS]
+    assert clock.now == S
+
+
+def test_a_poll_once_fast_poll_s_has_passed() -> None:
+    clock, wall, runner, _, log = _setup()
+    _busy(clock, wall, log, 10, 0.0004)  # 0.4 ms of wall per event
+    runner.advance(10 * MS)
+    # polls at wall 0 (before 1 ms), then after the events ending at 1.2, 2.4, 3.6 ms
+    assert wall.waits == [0, 0, 0, 0]
+    assert clock.now == 10 * MS
+
+
+def test_bytes_get_the_instant_of_the_poll_that_finds_them() -> None:
+    clock, wall, runner, line, log = _setup()
+    _busy(clock, wall, log, 10, 0.0004)
+    wall.data_at(0.0001, line, b"request")  # lands while the first event runs
+    runner.advance(10 * MS)
+    # polled before 1 ms (wall 0: not yet there), then before 4 ms (wall 1.2 ms)
+    assert ("request", 3 * MS) in log
+    assert log.index(("request", 3 * MS)) == 3  # after events 1, 2, 3, before 4
+    assert wall.now - START > 0.001
+
+
+def test_a_run_with_nothing_due_still_waits_for_the_peer_at_x1() -> None:
+    clock, wall, runner, line, log = _setup()
+    wall.data_at(0.3, line, b"late")
+    runner.advance(2 * S)
+    assert log == [("late", 300 * MS)]
+    assert clock.now == 2 * S
