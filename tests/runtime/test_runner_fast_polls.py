@@ -81,3 +81,43 @@ def test_a_run_with_nothing_due_still_waits_for_the_peer_at_x1() -> None:
     runner.advance(2 * S)
     assert log == [("late", 300 * MS)]
     assert clock.now == 2 * S
+
+
+def _ticked(wall: FakeWall) -> tuple[Log, list[int], int]:
+    """Events every 3 ms, ticks every 2 ms, a stop at the 7th tick; what was seen."""
+    clock = SimClock()
+    runner = Runner(clock, None, wall=wall)
+    runner.attach(FakeLine(fd=10), lambda data, now: None)
+    log: Log = []
+    for i in range(1, 40):
+        clock.schedule(i * 3 * MS, lambda now: log.append(("event", now)))
+    ticks: list[int] = []
+
+    def on_tick(now: int) -> None:
+        ticks.append(now)
+        if len(ticks) == 7:
+            runner.stop()
+
+    runner.run_forever(on_tick, tick_us=2 * MS)
+    return log, ticks, clock.now
+
+
+def test_ticks_and_stops_fall_on_the_same_instants_as_with_a_poll_per_instant() -> None:
+    assert _ticked(SlowPollWall()) == _ticked(FakeWall())
+
+
+def _until_five(wall: FakeWall) -> tuple[Log, int]:
+    clock = SimClock()
+    runner = Runner(clock, None, wall=wall)
+    runner.attach(FakeLine(fd=10), lambda data, now: None)
+    log: Log = []
+    for i in range(1, 20):
+        clock.schedule(i * MS, lambda now: log.append(("event", now)))
+    assert runner.run_until(lambda: len(log) == 5, S)
+    return log, clock.now
+
+
+def test_run_until_stops_at_the_same_instant_between_polls() -> None:
+    seen = _until_five(SlowPollWall())
+    assert seen == _until_five(FakeWall())
+    assert seen[1] == 5 * MS

@@ -22,8 +22,12 @@ Three ways to run, chosen afresh on every cycle (attachments may change):
   FAST_POLL_S): the descriptors are then polled between two instants only
   once that much wall time has passed since the last poll, and bytes that
   arrived meanwhile are given the instant of the poll that finds them, as
-  always (at most ``fast_poll_s`` of wall time after they arrived).  Other
-  walls (the tests') have none: a poll between every two instants.
+  always (at most ``fast_poll_s`` of wall time after they arrived).  Between
+  two polls the instants run in one go (``_between_polls``): commands, ticks
+  and the end are taken up at the next poll, a tick or the end stops the run
+  of instants where a cycle per instant would have, and a ``run_until``
+  predicate is still checked after every instant.  Other walls (the tests')
+  have none: a poll between every two instants.
 
 ``run_forever``'s ticks are not clock events: they never keep the clock busy.
 With nothing scheduled and no end, the runner waits on the wall (time follows
@@ -503,8 +507,7 @@ class Runner:
             if self._fast_poll:
                 now_wall = wall.monotonic()
                 if now_wall < self._next_poll:  # polled less than fast_poll_s ago
-                    if target is not None:
-                        self._settle(target)
+                    self._between_polls(target, end)
                     return
                 self._next_poll = now_wall + self._fast_poll
             ready = self._handle(wall.wait(0))
@@ -522,6 +525,24 @@ class Runner:
         reached = self._clamp(self.clock.now + waited, end)
         if not self._settle(reached) and ready:
             self._deliver(ready)
+
+    def _between_polls(self, target: int | None, end: int | None) -> None:
+        """Fast mode, no poll due: run instants back to back (each settled as a cycle
+        would) until ``fast_poll_s`` of wall time has passed since the last poll, the
+        end, the next tick or a stop; the cycle around then polls, ticks, takes commands."""
+        clock, wall = self.clock, self._wall
+        limit = end
+        if self._tick is not None:
+            limit = self._next_tick if limit is None else min(limit, self._next_tick)
+        next_poll = self._next_poll
+        while target is not None:
+            if self._settle(target):
+                return
+            target = clock.next_deadline()
+            if target is None or (limit is not None and target > limit):
+                return
+            if wall.monotonic() >= next_poll:
+                return
 
     def _clamp(self, sim: int, end: int | None) -> int:
         """Never before now (time never goes back), never past the end."""
