@@ -6,7 +6,8 @@ output reads what a full evaluation after every sample gave.
 Two TES 8EA live the same random history: sine, square and constant inputs, level
 changes, time, master writes of thresholds, threshold outputs, polarity and of the
 status word (resetting the latched alarm bits), power cycles.  The reference has the
-shortcut off (``_on_latch`` None: every sample evaluates the reflex outputs).
+shortcuts off (``_on_latch`` None: every sample evaluates the reflex outputs;
+``direct_wake`` False: every sample schedules the next through ``_wake``).
 """
 
 from __future__ import annotations
@@ -50,11 +51,18 @@ def _tes(shortcut: bool) -> Tes:
         tes.execute(WriteWord(address, value), Link.RS485, 0, False)
     if not shortcut:
         tes.ai._on_latch = None
+        tes.ai.direct_wake = False
     return tes
 
 
 def _map(tes: Tes) -> list[int]:
     return [tes.registers.peek(r, tes.clock.now) for r in tes.registers.table.values()]
+
+
+def _next(tes: Tes) -> list[int | None]:
+    """When each channel samples next (None: settled)."""
+    handles = [ch.handle for ch in tes.ai.channels.values()]
+    return [h.time if h is not None and h.active else None for h in handles]
 
 
 def _outputs(tes: Tes) -> list[bool]:
@@ -82,6 +90,8 @@ def test_the_reflex_shortcut_changes_nothing(steps: list[tuple]) -> None:  # typ
         assert _outputs(fast) == _outputs(ref), step
         assert fast.do.reflex == ref.do.reflex, step
         assert fast.ram.status == ref.ram.status, step  # the latches themselves
+        assert fast.clock.fired == ref.clock.fired, step  # the same samples, same instants
+        assert _next(fast) == _next(ref), step
 
 
 def test_the_shortcut_is_taken() -> None:

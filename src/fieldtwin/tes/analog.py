@@ -99,6 +99,7 @@ class AnalogInputs:
         # bit k: channel k under its low / over its high threshold (its last judgement)
         self.low_mask = 0
         self.high_mask = 0
+        self.direct_wake = True  # False: a sample reschedules through _wake (the tests')
         self._anchor = 0
         self._storage: Handle | None = None
 
@@ -186,7 +187,12 @@ class AnalogInputs:
             and samples.count(point) == size
         ):
             return
-        self._wake(ch, now + 1)
+        # the next slot of this channel: what _wake(ch, now + 1) finds, ``now`` being one
+        # of its slots (anchor + (slot + 1) * SLOT + j * period) and no handle set
+        if self.direct_wake and ch.handle is None and self._anchor <= now:
+            ch.handle = self._clock.schedule(now + self._period, lambda t: self._sample(ch, t))
+        else:
+            self._wake(ch, now + 1)
 
     def _scale(self, points: float, params: Mapping[str, Value], keys: _Keys) -> int:
         """§4.2.4 points 0..1023 -> final value (AMB-TES-18: linear, rounded)."""
