@@ -121,3 +121,25 @@ def test_run_until_stops_at_the_same_instant_between_polls() -> None:
     seen = _until_five(SlowPollWall())
     assert seen == _until_five(FakeWall())
     assert seen[1] == 5 * MS
+
+
+def test_every_run_polls_before_its_first_instant() -> None:
+    clock, wall, runner, line, log = _setup()
+    _busy(clock, wall, log, 10, 0.0)
+    runner.advance(5 * MS)  # polled once, at 0 (no wall time passes)
+    wall.data_at(0.0, line, b"between runs")  # e.g. sent by the caller between two runs
+    runner.advance(5 * MS)
+    assert log.index(("between runs", 5 * MS)) == 5  # before the event at 6 ms
+    assert wall.waits == [0, 0, 0]  # each run's first poll, then the one after the bytes
+
+
+def test_after_bytes_the_next_instant_polls_again() -> None:
+    clock, wall, runner, line, log = _setup()
+    _busy(clock, wall, log, 5, 0.0)
+    wall.data_at(0.0, line, b"first")
+    runner.advance(10 * MS)
+    # the run's first poll finds bytes, so the next instant polls again (none: the
+    # polls then wait for fast_poll_s of wall time, which does not pass here); after
+    # the last event, nothing is due: the idle wait for a peer up to the end
+    assert wall.waits == [0, 0, 0.005]
+    assert log[0] == ("first", 0)

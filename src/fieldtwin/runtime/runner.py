@@ -22,7 +22,10 @@ Three ways to run, chosen afresh on every cycle (attachments may change):
   FAST_POLL_S): the descriptors are then polled between two instants only
   once that much wall time has passed since the last poll, and bytes that
   arrived meanwhile are given the instant of the poll that finds them, as
-  always (at most ``fast_poll_s`` of wall time after they arrived).  Between
+  always (at most ``fast_poll_s`` of wall time after they arrived).  Every
+  run (``advance``, ``run_until``, ...) polls before its first instant, and
+  after a poll that found bytes the next instant polls again: while a peer
+  is sending, the polls are between every two instants, as without it.  Between
   two polls the instants run in one go (``_between_polls``): commands, ticks
   and the end are taken up at the next poll, a tick or the end stops the run
   of instants where a cycle per instant would have, and a ``run_until``
@@ -420,6 +423,7 @@ class Runner:
         self._stopping = False
         self._predicate = predicate
         pace = _Pace(self._wall.monotonic(), self.clock.now, self.speed or 1.0)
+        self._next_poll = float("-inf")  # a run polls before its first instant
         self._paces.append(pace)
         self._depth += 1
         try:
@@ -512,6 +516,7 @@ class Runner:
                 self._next_poll = now_wall + self._fast_poll
             ready = self._handle(wall.wait(0))
             if ready:
+                self._next_poll = float("-inf")  # while bytes keep coming: every instant
                 self._deliver(ready)  # arrived while the clock stood at now
             elif target is not None:
                 self._settle(target)
