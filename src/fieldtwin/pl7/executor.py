@@ -95,6 +95,7 @@ class Executor:
             bit: memory.bit_writer(t.Internal("SY", bit))
             for bit in (COLD_RESTART_BIT, HOT_RESTART_BIT, MINUTE_BIT, FAULT_BIT)
         }
+        self._minute = self._sy[MINUTE_BIT]
         self.grafcet: Grafcet | None = None
         chart = program.section("CHART")
         if isinstance(chart, t.Chart):
@@ -247,9 +248,15 @@ class Executor:
         if restart is not None:
             self._sy[restart](1)
         if now_us is not None:
-            self._sy[MINUTE_BIT](1 if now_us % MINUTE_US >= MINUTE_US // 2 else 0)
+            self._minute(1 if now_us % MINUTE_US >= MINUTE_US // 2 else 0)
         snapshot = self._snapshot
-        if snapshot is None or restart is not None or not self.skip_idle or self._breakpoints():
+        if (
+            snapshot is None
+            or restart is not None
+            or not self.skip_idle
+            or self._step_breaks
+            or any(self._label_breaks.values())  # _breakpoints(), inline
+        ):
             self._fixed = None
             self._sections()
         else:

@@ -16,6 +16,7 @@ one is never skipped.
 from __future__ import annotations
 
 from collections.abc import Callable
+from operator import itemgetter
 from typing import Any
 
 from fieldtwin.pl7 import tree as t
@@ -115,9 +116,17 @@ class WatchedMemory:
         parts: list[str] = []
         for reader in extra:
             self._readers.setdefault(reader, reader)
-        for k, (table, index) in enumerate(self._cells.values()):
+        # the cells of one table are read by one itemgetter (a tuple built in C)
+        tables: dict[int, tuple[list[int], list[int]]] = {}
+        for table, index in self._cells.values():
+            tables.setdefault(id(table), (table, []))[1].append(index)
+        for k, (table, indexes) in enumerate(tables.values()):
             env[f"_c{k}"] = table
-            parts.append(f"_c{k}[{index}]")
+            if len(indexes) == 1:
+                parts.append(f"_c{k}[{indexes[0]}]")
+            else:
+                env[f"_g{k}"] = itemgetter(*indexes)
+                parts.append(f"_g{k}(_c{k})")
         for k, reader in enumerate(self._readers.values()):
             env[f"_r{k}"] = reader
             parts.append(f"_r{k}()")

@@ -17,7 +17,20 @@ Three ways to run, chosen afresh on every cycle (attachments may change):
   back with a zero-timeout poll of the descriptors between instants; when no
   event is due before the end, the runner blocks for data and simulated time
   follows the wall clock at x1 while it waits (so a limit of n simulated
-  seconds is also at most n wall seconds of waiting).
+  seconds is also at most n wall seconds of waiting).  A wall may ask for
+  fewer polls while events run (its ``fast_poll_s``; the system wall's is
+  FAST_POLL_S): the descriptors are then polled between two instants only
+  once that much wall time has passed since the last poll, and bytes that
+  arrived meanwhile are given the instant of the poll that finds them, as
+  always (at most ``fast_poll_s`` of wall time after they arrived).  Every
+  run (``advance``, ``run_until``, ...) polls before its first instant, and
+  after a poll that found bytes the next instant polls again: while a peer
+  is sending, the polls are between every two instants, as without it.  Between
+  two polls the instants run in one go (``_between_polls``): commands, ticks
+  and the end are taken up at the next poll, a tick or the end stops the run
+  of instants where a cycle per instant would have, and a ``run_until``
+  predicate is still checked after every instant.  Other walls (the tests')
+  have none: a poll between every two instants.
 
 ``run_forever``'s ticks are not clock events: they never keep the clock busy.
 With nothing scheduled and no end, the runner waits on the wall (time follows
@@ -133,6 +146,9 @@ class Runner:
         self.speed = speed
         self.report: Report = report or _to_stderr
         self._wall: WallClock = wall or SystemWall()
+        # fast mode: the least wall time between two polls while events run (0: every instant)
+        self._fast_poll: float = getattr(self._wall, "fast_poll_s", 0.0)
+        self._next_poll = float("-inf")  # wall time of the next such poll
         self._links: dict[int, _Link] = {}  # id(transport) -> link
         self._listeners: dict[int, _Accepting] = {}  # id(listener) -> entry
         self._by_fd: dict[int, _Link | _Accepting] = {}
@@ -407,6 +423,7 @@ class Runner:
         self._stopping = False
         self._predicate = predicate
         pace = _Pace(self._wall.monotonic(), self.clock.now, self.speed or 1.0)
+        self._next_poll = float("-inf")  # a run polls before its first instant
         self._paces.append(pace)
         self._depth += 1
         try:
@@ -491,8 +508,15 @@ class Runner:
     def _fast_step(self, target: int | None, end: int | None, busy: bool) -> None:
         wall = self._wall
         if busy:
+            if self._fast_poll:
+                now_wall = wall.monotonic()
+                if now_wall < self._next_poll:  # polled less than fast_poll_s ago
+                    self._between_polls(target, end)
+                    return
+                self._next_poll = now_wall + self._fast_poll
             ready = self._handle(wall.wait(0))
             if ready:
+                self._next_poll = float("-inf")  # while bytes keep coming: every instant
                 self._deliver(ready)  # arrived while the clock stood at now
             elif target is not None:
                 self._settle(target)
@@ -506,6 +530,24 @@ class Runner:
         reached = self._clamp(self.clock.now + waited, end)
         if not self._settle(reached) and ready:
             self._deliver(ready)
+
+    def _between_polls(self, target: int | None, end: int | None) -> None:
+        """Fast mode, no poll due: run instants back to back (each settled as a cycle
+        would) until ``fast_poll_s`` of wall time has passed since the last poll, the
+        end, the next tick or a stop; the cycle around then polls, ticks, takes commands."""
+        clock, wall = self.clock, self._wall
+        limit = end
+        if self._tick is not None:
+            limit = self._next_tick if limit is None else min(limit, self._next_tick)
+        next_poll = self._next_poll
+        while target is not None:
+            if self._settle(target):
+                return
+            target = clock.next_deadline()
+            if target is None or (limit is not None and target > limit):
+                return
+            if wall.monotonic() >= next_poll:
+                return
 
     def _clamp(self, sim: int, end: int | None) -> int:
         """Never before now (time never goes back), never past the end."""

@@ -27,6 +27,10 @@ Ready = tuple[Collection[int], Collection[int]]  # (readable fds, writable fds)
 # at most PRECISE_SPIN_S plus the kernel's one-millisecond rounding).
 PRECISE_SPIN_S = 0.0015
 PRECISE_NAP_S = 0.0001  # a nap between two polls: never a busy loop holding the GIL
+# Issue 13: at ``--speed max`` the runner polls the descriptors between two instants
+# only once this much wall time has passed since the last poll (Runner, "fast"): a
+# select per instant was a quarter of the default plant's time.
+FAST_POLL_S = 0.0001
 
 
 class WallClock(Protocol):
@@ -56,6 +60,8 @@ _EVENTS = {
 
 class SystemWall:
     """``time.monotonic`` and one ``selectors.DefaultSelector``, updated incrementally."""
+
+    fast_poll_s = FAST_POLL_S  # the runner's least wall time between polls while busy
 
     def __init__(self) -> None:
         self._selector: selectors.BaseSelector = selectors.DefaultSelector()

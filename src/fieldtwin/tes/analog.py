@@ -49,6 +49,26 @@ class _Channel:
     high: bool = False
     hysteresis: bool = False  # §4.2.6.2 reflex output state
     history: deque[int] = field(default_factory=lambda: deque(maxlen=HISTORY_LENGTH))
+    bit: int = 0  # 1 << number, for the alarm masks
+    reflexed: bool = False  # its judgement since acquired went through an evaluation
+
+
+@dataclass(frozen=True, slots=True)
+class _Keys:
+    """The EEPROM parameter names one channel's acquisition reads (built once)."""
+
+    filter: str
+    corr_zero: str
+    corr_full: str
+    scale: str
+    scale_min: str
+    scale_max: str
+
+    @classmethod
+    def of(cls, k: int) -> _Keys:
+        p = f"ai{k}."
+        names = ("filter", "corr_zero", "corr_full", "scale", "scale_min", "scale_max")
+        return cls(*(p + name for name in names))
 
 
 class AnalogInputs:
@@ -61,13 +81,25 @@ class AnalogInputs:
         params: Callable[[], Mapping[str, Value]],
         word: Callable[[int], int],
         on_evaluate: Callable[[int], None],
+        on_latch: Callable[[], None] | None = None,
     ) -> None:
         self._model = model
         self._clock = clock
         self._params = params  # the EEPROM values (filter N, scaling, corrections)
         self._word = word  # an MP register (thresholds, outputs, storage period)
         self._on_evaluate = on_evaluate
-        self.channels = {k: _Channel(k, slot) for slot, k in enumerate(model.analog_inputs)}
+        # after a sample that changed no threshold state: only the alarm latches
+        self._on_latch = on_latch
+        self.channels = {
+            k: _Channel(k, slot, bit=1 << k) for slot, k in enumerate(model.analog_inputs)
+        }
+        self._keys = {k: _Keys.of(k) for k in model.analog_inputs}
+        self._period = model.analog_slots * SLOT
+        self._full = model.analog_range.full_scale
+        # bit k: channel k under its low / over its high threshold (its last judgement)
+        self.low_mask = 0
+        self.high_mask = 0
+        self.direct_wake = True  # False: a sample reschedules through _wake (the tests')
         self._anchor = 0
         self._storage: Handle | None = None
 
@@ -78,7 +110,8 @@ class AnalogInputs:
         self._anchor = now
         for ch in self.channels.values():
             level, signal = ch.level, ch.signal
-            self.channels[ch.number] = _Channel(ch.number, ch.slot, level, signal)
+            self.channels[ch.number] = _Channel(ch.number, ch.slot, level, signal, bit=ch.bit)
+        self.low_mask = self.high_mask = 0
         for ch in self.channels.values():
             self._wake(ch, now)
         self.restart_storage(now)
@@ -113,46 +146,59 @@ class AnalogInputs:
     def _wake(self, ch: _Channel, now: int) -> None:
         if ch.handle is not None or self._anchor > now:
             return
-        period = self._model.analog_slots * SLOT
+        period = self._period
         first = self._anchor + (ch.slot + 1) * SLOT
         at = first if now <= first else first + -(-(now - first) // period) * period
         ch.handle = self._clock.schedule(at, lambda t: self._sample(ch, t))
 
-    def _points(self, ch: _Channel, now: int) -> float:
+    def _points(self, ch: _Channel, now: int, params: Mapping[str, Value], keys: _Keys) -> float:
         """Electrical value -> 0..1023 points (§4.2.4), corrected (§4.2.5)."""
-        full = self._model.analog_range.full_scale
-        level = min(max(self.level(ch.number, now), 0.0), full)  # the converter saturates
+        full = self._full
+        signal = ch.signal
+        level = signal.value_at(now) if signal is not None else ch.level
+        level = min(max(level, 0.0), full)  # the converter saturates
         raw = round_half_up(level / full * POINTS_MAX)
-        params = self._params()
-        zero, top = params[f"ai{ch.number}.corr_zero"], params[f"ai{ch.number}.corr_full"]
+        zero, top = params[keys.corr_zero], params[keys.corr_full]
         assert isinstance(zero, int) and isinstance(top, int)
         corrected = raw + zero + (top - zero) * raw / POINTS_MAX
         return max(0.0, min(float(POINTS_MAX), corrected))
 
     def _sample(self, ch: _Channel, now: int) -> None:
         ch.handle = None
-        size = self._params()[f"ai{ch.number}.filter"]
+        params, keys = self._params(), self._keys[ch.number]
+        size = params[keys.filter]
         assert isinstance(size, int)
-        point = self._points(ch, now)
-        if ch.samples.maxlen != size:
-            ch.samples = deque(ch.samples, maxlen=size)
-        ch.samples.append(point)
+        point = self._points(ch, now, params, keys)
+        samples = ch.samples
+        if samples.maxlen != size:
+            samples = ch.samples = deque(samples, maxlen=size)
+        samples.append(point)
         # §4.2.3 average of the last N samples (AMB-TES-16: of those available at start)
-        ch.value = self._scale(ch.number, sum(ch.samples) / len(ch.samples))
+        ch.value = self._scale(sum(samples) / len(samples), params, keys)
         ch.acquired = True
         self._judge_sampled(ch, now)
-        settled = len(ch.samples) == size and all(s == point for s in ch.samples)
         # a signal may vary smoothly with no breakpoint (a sine): only a level settles
-        constant = ch.signal is None or isinstance(ch.signal, Constant)
-        if not (settled and constant):
+        signal = ch.signal
+        # settled: the average is full of this one value (point == point: not NaN)
+        if (
+            (signal is None or isinstance(signal, Constant))
+            and len(samples) == size
+            and point == point
+            and samples.count(point) == size
+        ):
+            return
+        # the next slot of this channel: what _wake(ch, now + 1) finds, ``now`` being one
+        # of its slots (anchor + (slot + 1) * SLOT + j * period) and no handle set
+        if self.direct_wake and ch.handle is None and self._anchor <= now:
+            ch.handle = self._clock.schedule(now + self._period, lambda t: self._sample(ch, t))
+        else:
             self._wake(ch, now + 1)
 
-    def _scale(self, k: int, points: float) -> int:
+    def _scale(self, points: float, params: Mapping[str, Value], keys: _Keys) -> int:
         """§4.2.4 points 0..1023 -> final value (AMB-TES-18: linear, rounded)."""
-        params = self._params()
-        if params[f"ai{k}.scale"] != "on":
+        if params[keys.scale] != "on":
             return round_half_up(points)
-        lo, hi = params[f"ai{k}.scale_min"], params[f"ai{k}.scale_max"]
+        lo, hi = params[keys.scale_min], params[keys.scale_max]
         assert isinstance(lo, int) and isinstance(hi, int)
         return max(-32768, min(32767, round_half_up(lo + (hi - lo) * points / POINTS_MAX)))
 
@@ -169,17 +215,31 @@ class AnalogInputs:
     def _judge_sampled(self, ch: _Channel, now: int) -> None:
         """After a sample: only ``ch`` changed.  Every other channel's bits are those of
         its last judgement (its value and the thresholds are unchanged since: a
-        threshold write runs ``evaluate``), and judging again leaves them as they are."""
+        threshold write runs ``evaluate``), and judging again leaves them as they are.
+
+        When ``ch`` had been evaluated since acquired and its low, high and hysteresis
+        states came out as they were, the reflex outputs are those the last evaluation
+        gave (they depend on these states, the threshold output words and the polarity,
+        and a write of those runs ``evaluate``): only the alarm latches are set again
+        (the master may have reset them since)."""
+        before = (ch.low, ch.high, ch.hysteresis)
         self._judge(ch)
-        self._on_evaluate(now)
+        latch = self._on_latch
+        if latch is not None and ch.reflexed and before == (ch.low, ch.high, ch.hysteresis):
+            latch()
+        else:
+            ch.reflexed = True
+            self._on_evaluate(now)
 
     def _judge(self, ch: _Channel) -> None:
-        k = ch.number
-        ch.low = ch.value < to_signed(self._word(0x023 + k))
-        ch.high = ch.value > to_signed(self._word(0x02B + k))
-        if ch.high:
+        k, bit = ch.number, ch.bit
+        low = ch.low = ch.value < to_signed(self._word(0x023 + k))
+        high = ch.high = ch.value > to_signed(self._word(0x02B + k))
+        self.low_mask = self.low_mask | bit if low else self.low_mask & ~bit
+        self.high_mask = self.high_mask | bit if high else self.high_mask & ~bit
+        if high:
             ch.hysteresis = True  # §4.2.6.2 set above the high threshold
-        elif ch.low:
+        elif low:
             ch.hysteresis = False  # ... reset under the low threshold
 
     def reflex(self) -> dict[int, bool]:

@@ -79,7 +79,12 @@ class Tes:
         self.di = DigitalInputs(self.model.digital_inputs, self.clock, self._filter_ticks)
         self.do = DigitalOutputs(self.model.digital_outputs, self._blink_word)
         self.ai = AnalogInputs(
-            self.model, self.clock, lambda: ram.params, ram.word, self._on_evaluate
+            self.model,
+            self.clock,
+            lambda: ram.params,
+            ram.word,
+            self._on_evaluate,
+            self._latch_alarms,
         )
         self.line_faults = LineFaults()
         self.registers = RegisterFile(
@@ -190,13 +195,16 @@ class Tes:
         )
         return self.ram.word(base + i)
 
-    def _on_evaluate(self, now: int) -> None:
+    def _latch_alarms(self) -> None:
         # §6.4.1 bits 6/7 latched until the master resets them (AMB-TES-19)
-        channels = self.ai.channels.values()
-        if any(ch.low for ch in channels):
+        ai = self.ai
+        if ai.low_mask:
             self.ram.status |= state.LOW_ALARM
-        if any(ch.high for ch in channels):
+        if ai.high_mask:
             self.ram.status |= state.HIGH_ALARM
+
+    def _on_evaluate(self, now: int) -> None:
+        self._latch_alarms()
         polarity = self.ram.word(0x03B)
         reflex = self.ai.reflex()
         self.do.reflex = {o: v != bool((polarity >> o) & 1) for o, v in reflex.items()}

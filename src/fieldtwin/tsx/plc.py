@@ -325,7 +325,8 @@ class Plc:
         self._bus_pending = True
 
     def _end_of_task(self, now: int) -> None:
-        self._scan = self.clock.call_later(self.scan_us, self._end_of_task)
+        # the clock calls this at ``now`` = its time: call_later(scan_us) without the check
+        self._scan = self.clock.schedule(now + self.scan_us, self._end_of_task)
         if not self._powered:
             return
         self.cycles += 1

@@ -199,7 +199,8 @@ class PlcMemory:
             return lambda: fields[name]
         tb = self.plc.txt.block(obj.index)
         if obj.name == "D":  # 1 before the first exchange (SCM 4.6 SR7 starts on TXT0,D)
-            return lambda: int(tb.state in (TxtState.IDLE, TxtState.DONE))
+            machine, done = tb.machine, (TxtState.IDLE, TxtState.DONE)  # a block keeps its
+            return lambda: int(machine.state in done)  # machine: tb.state is machine.state
         if obj.name == "E":
             return lambda: int(tb.result is not None and tb.result.e)
         if obj.name == "S":
