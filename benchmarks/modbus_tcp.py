@@ -198,6 +198,7 @@ def main() -> None:
 
 def _kit(kit: Path, duration: float, reps: int) -> int:
     """Run the kit's compare.py against pymodbus, libmodbus (if built) and fieldtwin."""
+    kit = kit.resolve()  # compare.py runs in the kit's directory: a relative path would break
     build = Path(os.environ.get("BENCH_BUILD", "/tmp/fieldtwin-bench"))
     compare, mbload = kit / "compare.py", build / "mbload"
     if not compare.is_file():
