@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from fieldtwin.clock import MS, S
 from fieldtwin.console import Console
 from fieldtwin.console_syntax import module_address
-from fieldtwin.devices.face import Device, DeviceStatus, Family, Input, TesAddress
+from fieldtwin.devices.face import Device, DeviceStatus, Family, Input, device_id
 from fieldtwin.errors import ConfigError, FieldtwinError
 from fieldtwin.plant import Plant
 from fieldtwin.runtime.events import EventBus
@@ -38,21 +38,6 @@ class _Started:
     block: TextBlock
     m: int
     c: int
-
-
-def device_id(device: Device, devices: list[Device]) -> str:
-    """``5`` / ``23`` for a module; ``tes1`` for a TES (``tes1@2`` when slave 1 answers
-    on several endpoints: the second endpoint in file order)."""
-    address = device.address
-    if not isinstance(address, TesAddress):
-        return str(address)
-    endpoints: list[str] = []
-    for other in devices:
-        a = other.address
-        if isinstance(a, TesAddress) and a.slave == address.slave and a.endpoint not in endpoints:
-            endpoints.append(a.endpoint)
-    index = endpoints.index(address.endpoint)
-    return f"tes{address.slave}" if index == 0 else f"tes{address.slave}@{index + 1}"
 
 
 def status_json(status: DeviceStatus) -> Json:

@@ -14,7 +14,7 @@ its channel number (``"0"``), a TES analog input by ``a`` + its number
 from __future__ import annotations
 
 import enum
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Protocol
@@ -243,3 +243,19 @@ def pick_fault(device: Device, name: str) -> Fault:
             f"unknown fault {name!r} for {device.kind} {device.address} (allowed: {allowed})"
         )
     return found
+
+
+def device_id(device: Device, devices: Sequence[Device]) -> str:
+    """A device's id in the control API and the test helpers: ``5`` / ``23`` for a
+    module; ``tes1`` for a TES (``tes1@2`` when slave 1 answers on several
+    endpoints: the second endpoint in file order)."""
+    address = device.address
+    if not isinstance(address, TesAddress):
+        return str(address)
+    endpoints: list[str] = []
+    for other in devices:
+        a = other.address
+        if isinstance(a, TesAddress) and a.slave == address.slave and a.endpoint not in endpoints:
+            endpoints.append(a.endpoint)
+    index = endpoints.index(address.endpoint)
+    return f"tes{address.slave}" if index == 0 else f"tes{address.slave}@{index + 1}"

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from typing import Protocol
 
 from fieldtwin.clock import S, SimClock
-from fieldtwin.devices.face import Device, TesAddress
+from fieldtwin.devices.face import Device, device_id
 from fieldtwin.devices.module import ModuleDevice
 from fieldtwin.devices.tes import TesRegisters
 from fieldtwin.errors import ConfigError
@@ -60,20 +60,6 @@ def _split(name: str) -> tuple[str | None, str]:
     if sep and device.strip() and rest.strip():
         return device.strip(), rest.strip()
     return None, name.strip()
-
-
-def device_ident(device: Device, devices: list[Device]) -> str:
-    """The control API's id: ``5`` / ``23`` for a module, ``tes1`` (``tes1@2``) for a TES."""
-    address = device.address
-    if not isinstance(address, TesAddress):
-        return str(address)
-    endpoints: list[str] = []
-    for other in devices:
-        a = other.address
-        if isinstance(a, TesAddress) and a.slave == address.slave and a.endpoint not in endpoints:
-            endpoints.append(a.endpoint)
-    index = endpoints.index(address.endpoint)
-    return f"tes{address.slave}" if index == 0 else f"tes{address.slave}@{index + 1}"
 
 
 class _Clocked:
@@ -144,9 +130,9 @@ class PlantTarget(_Clocked):
     def _device(self, ident: str) -> Device:
         devices = self.plant.devices
         for device in devices:
-            if device_ident(device, devices) == ident.lower():
+            if device_id(device, devices) == ident.lower():
                 return device
-        have = ", ".join(device_ident(d, devices) for d in devices) or "none"
+        have = ", ".join(device_id(d, devices) for d in devices) or "none"
         raise ConfigError(f"{self.label}: no device {ident!r} (have: {have})")
 
     def value(self, name: str) -> int:

@@ -17,7 +17,7 @@ from collections.abc import Callable
 from contextvars import ContextVar, Token
 from types import TracebackType
 
-from fieldtwin.transports.base import LineSettings, line_settings
+from fieldtwin.transports.base import FdTransport, LineSettings, line_settings
 from fieldtwin.transports.pty import PtyTransport
 from fieldtwin.transports.serial import SerialTransport
 from fieldtwin.transports.tcp import DEFAULT_MAX_CONNECTIONS, TcpListener, TcpTransport
@@ -32,26 +32,17 @@ def current() -> Wiring | None:
     return _CURRENT.get()
 
 
-class _Sending:
-    """What every virtual transport shares: a key given by the runner, a sink."""
+class _Sending(FdTransport):
+    """What every virtual transport shares: a key given by the runner, a sink, no
+    descriptor, nothing ever received (the replay delivers the recorded bytes)."""
 
     key: str = "?"
     sink: Sink | None = None
 
-    def _emit(self, data: bytes) -> int:
+    def _write(self, data: bytes) -> int:
         if self.sink is not None:
             self.sink(self.key, bytes(data))
         return len(data)
-
-
-class VirtualPty(_Sending, PtyTransport):
-    def __init__(self, number: int, settings: LineSettings | None) -> None:
-        super(PtyTransport, self).__init__(f"pty:virtual/{number}")
-        self.settings = settings or line_settings()
-        self.peer_path = f"virtual/{number}"
-
-    def _write(self, data: bytes) -> int:
-        return self._emit(data)
 
     def receive(self) -> bytes:
         self._check_open("receive")
@@ -62,6 +53,13 @@ class VirtualPty(_Sending, PtyTransport):
 
     def _release(self) -> None:
         pass
+
+
+class VirtualPty(_Sending, PtyTransport):
+    def __init__(self, number: int, settings: LineSettings | None) -> None:
+        super(PtyTransport, self).__init__(f"pty:virtual/{number}")
+        self.settings = settings or line_settings()
+        self.peer_path = f"virtual/{number}"
 
 
 class VirtualSerial(_Sending, SerialTransport):
@@ -72,19 +70,6 @@ class VirtualSerial(_Sending, SerialTransport):
         self.settings = settings or line_settings()
         self.peer_path = device
 
-    def _write(self, data: bytes) -> int:
-        return self._emit(data)
-
-    def receive(self) -> bytes:
-        self._check_open("receive")
-        return b""
-
-    def fileno(self) -> int | None:
-        return None
-
-    def _release(self) -> None:
-        pass
-
 
 class VirtualConnection(_Sending, TcpTransport):
     """A connection a replay hands to a virtual listener's ``on_connect``."""
@@ -92,19 +77,6 @@ class VirtualConnection(_Sending, TcpTransport):
     def __init__(self, name: str) -> None:
         super(TcpTransport, self).__init__(name)
         self._on_release = None
-
-    def _write(self, data: bytes) -> int:
-        return self._emit(data)
-
-    def receive(self) -> bytes:
-        self._check_open("receive")
-        return b""
-
-    def fileno(self) -> int | None:
-        return None
-
-    def _release(self) -> None:
-        pass
 
 
 class VirtualListener(TcpListener):
