@@ -70,8 +70,8 @@ def bind(
             _serve_modbus(devices, runner, binding, events)
         if SERIAL_LINE in groups:
             _attach_channels(devices, binding, events)
-        if events is not None:
-            _tap_logbooks(devices, binding, events)
+            if events is not None:  # the modules' group: bound once per plant
+                _tap_logbooks(devices, binding, events)
     except BaseException:
         binding.close()
         raise

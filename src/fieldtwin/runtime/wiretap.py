@@ -199,7 +199,7 @@ class Stream:
         write = self._pending.get(transaction, {}).get("_pdu")
         fields.update(self._reply(transaction, unit, pdu))
         self._publish(now, OUT, unit, fields)
-        self._register(now, unit, write, pdu, fields)
+        self._register(now, unit, write, pdu)
 
     # -- Modbus RTU ------------------------------------------------------------------
 
@@ -230,7 +230,7 @@ class Stream:
         write = self._pending.get(slave, {}).get("_pdu")
         fields.update(self._reply(slave, slave, data[1:-2]))
         self._publish(now, OUT, slave, fields)
-        self._register(now, slave, write, data[1:-2], fields)
+        self._register(now, slave, write, data[1:-2])
 
     # -- both ------------------------------------------------------------------------
 
@@ -241,9 +241,7 @@ class Stream:
         if pdu and pdu[0] in WRITE_FUNCTIONS:
             self._pending[key]["_pdu"] = pdu
 
-    def _register(
-        self, now: int, unit: int, request: object, reply: bytes, fields: dict[str, object]
-    ) -> None:
+    def _register(self, now: int, unit: int, request: object, reply: bytes) -> None:
         """A write the TES answered without an exception: a ``register`` event."""
         if not isinstance(request, bytes) or not reply or reply[0] & EXCEPTION_FLAG:
             return

@@ -31,7 +31,7 @@ from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
-from typing import IO
+from typing import IO, Any
 
 from fieldtwin.client import Client, ControlError
 from fieldtwin.errors import ConfigError, FieldtwinError
@@ -448,23 +448,23 @@ class RunningTarget:
             return int(value[2:].rstrip("'"), 16)
         return int(value)
 
-    def leds(self, device: str | None) -> tuple[str, dict[str, str]]:
+    def _status(self, device: str | None) -> tuple[str, dict[str, Any]]:
+        """(``"KIND DEVICE"``, the device's status) through the control API."""
         if device is None:
             raise ConfigError(f"{self.label}: name the device (e.g. '5' or 'tes1')")
         try:
             status = self.plant.api.status(device)
         except ControlError as exc:
             raise ConfigError(str(exc)) from None
-        return f"{status['kind']} {device}", {k: str(v) for k, v in status["leds"].items()}
+        return f"{status['kind']} {device}", status
+
+    def leds(self, device: str | None) -> tuple[str, dict[str, str]]:
+        what, status = self._status(device)
+        return what, {k: str(v) for k, v in status["leds"].items()}
 
     def state(self, device: str | None) -> tuple[str, str]:
-        if device is None:
-            raise ConfigError(f"{self.label}: name the device (e.g. '5' or 'tes1')")
-        try:
-            status = self.plant.api.status(device)
-        except ControlError as exc:
-            raise ConfigError(str(exc)) from None
-        return f"{status['kind']} {device}", str(status["state"])
+        what, status = self._status(device)
+        return what, str(status["state"])
 
     def default_show(self) -> list[str]:
         return []
