@@ -173,6 +173,7 @@ class RegisterFile:
         self.di.set_value32(kind.value, i, new, now)
 
     def put_parameter(self, reg: Register, value: int, now: int) -> None:
+        self.di.sync()  # inputs followed at read time: their edges so far, old filters
         self.ram.words[reg.address] = value
         self._on_parameter_write(reg.kind, now)
 

@@ -3,15 +3,31 @@
 Event-driven: a direct change schedules its confirmation after the filter time
 of the new state; chronometers are computed at read time from the time of the
 last filtered change (DESIGN rule 3).
+
+An input driven by a signal (``follow``) is computed at read time (issue 15): its
+edges and their confirmations are not clock events; every reading or writing method
+here first catches the followed inputs up to the present, edge by edge, in the order
+the clock would have run them (a confirmation before an edge of the same instant),
+and a pulse train in its steady regime jumps whole periods at once.  The TES calls
+``sync`` before a master write of a parameter (the filter times) as well.  A
+per-clock :class:`Beat` keeps the clock busy while inputs are followed (one event
+per simulated second: a plant of pulsing TES still runs at ``--speed max``) and
+catches each followed input up at least once a minute of simulated time.
+``DigitalInputs.lazy = False`` restores an event per edge (the property test's
+reference, tests/tes/test_tes_lazy_inputs.py).
 """
 
 from __future__ import annotations
 
 import enum
+import weakref
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Protocol
 
-from fieldtwin.clock import MS, Handle, SimClock
+from fieldtwin.clock import MS, Handle, S, SimClock
+from fieldtwin.signals.discrete import PulseTrain
 
 TICK = 100 * MS  # §4.1.4 / §6.2.5 chronometers in 1/10 s
 FILTER_BASE = 5 * MS  # §4.1.1 steps of 5 ms
@@ -24,6 +40,23 @@ class Wiring(enum.Enum):
     OK = "ok"
     SHORT = "short"  # short circuit: the input reads 1
     OPEN = "open"  # broken wire: the input reads 0
+
+
+class DiscreteSource(Protocol):
+    """Anything with the fieldtwin.signals DiscreteSignal methods."""
+
+    def value_at(self, t_us: int) -> bool: ...
+
+    def next_change(self, t_us: int) -> int | None: ...
+
+
+@dataclass(slots=True)
+class _Follow:
+    """A signal an input follows at read time: the time of its next edge."""
+
+    signal: DiscreteSource
+    next_edge: int | None
+    pulse: PulseTrain | None  # a pulse train: whole periods can be jumped
 
 
 @dataclass(slots=True)
@@ -41,10 +74,16 @@ class _Input:
     bias: int = 0  # us added to the running state's duration (a master write)
     last: list[int] = field(default_factory=lambda: [0, 0])  # ticks of the last 0 / 1 state
     cumulated: list[int] = field(default_factory=lambda: [0, 0])  # us of closed 0 / 1 states
+    follow: _Follow | None = None  # followed at read time (lazy)
+    pending_at: int | None = None  # a followed input's confirmation: when,
+    pending_value: bool = False  # to which state,
+    pending_edge: int = 0  # and the edge it confirms
 
 
 class DigitalInputs:
     """The ``count`` digital inputs of one TES."""
+
+    lazy = True  # followed inputs computed at read time (False: an event per edge)
 
     def __init__(self, count: int, clock: SimClock, filter_ticks: Callable[[bool], int]) -> None:
         self.count = count
@@ -52,6 +91,9 @@ class DigitalInputs:
         self._filter_ticks = filter_ticks
         self._inputs = [_Input() for _ in range(count)]
         self.on_change: Callable[[int, bool, int], None] | None = None
+        self._followed: list[int] = []  # inputs that follow a signal at read time
+        self._synced = -1  # the instant the followed inputs were caught up to
+        self._drivers: dict[int, Handle] = {}  # lazy = False: each input's next edge
 
     # --- power -------------------------------------------------------------
 
@@ -59,25 +101,156 @@ class DigitalInputs:
         """RAM is lost: states restart from the present direct inputs."""
         self.power_off()
         for j, old in enumerate(self._inputs):
-            inp = _Input(contact=old.contact, wiring=old.wiring, since=now)
+            inp = _Input(contact=old.contact, wiring=old.wiring, since=now, follow=old.follow)
             inp.direct = inp.filtered = inp.memorized = self._electrical(inp)
             self._inputs[j] = inp
 
     def power_off(self) -> None:
+        self.sync()
         for inp in self._inputs:
             if inp.pending is not None:
                 inp.pending.cancel()
                 inp.pending = None
+            inp.pending_at = None
 
     # --- the field side ----------------------------------------------------
 
     def set_contact(self, i: int, value: bool, now: int) -> None:
+        self.sync()
         self._inputs[i].contact = value
         self._update(i, now)
 
     def set_wiring(self, i: int, wiring: Wiring, now: int) -> None:
+        self.sync()
         self._inputs[i].wiring = wiring
         self._update(i, now)
+
+    def follow(self, i: int, signal: DiscreteSource, now: int) -> None:
+        """Input ``i`` follows ``signal`` from ``now`` on (its value now, then its edges)."""
+        self.unfollow(i)
+        if not self.lazy or self.on_change is not None:
+            self._step(i, signal, now)  # an event per edge
+            return
+        self.sync()
+        inp = self._inputs[i]
+        at = signal.next_change(now)
+        pulse = signal if isinstance(signal, PulseTrain) else None
+        inp.follow = _Follow(signal, None if at is None else max(at, now + 1), pulse)
+        self._followed.append(i)
+        if inp.pending is not None:  # confirmed at read time from now on
+            at = inp.pending.time
+            inp.pending.cancel()
+            inp.pending = None
+            inp.pending_at, inp.pending_value = at, inp.direct
+            inp.pending_edge = at - self._delay(inp.direct)
+        inp.contact = bool(signal.value_at(now))
+        self._update(i, now)
+        Beat.of(self._clock).join(self)
+
+    def unfollow(self, i: int) -> None:
+        """Input ``i`` follows no signal any more (caught up to now first)."""
+        handle = self._drivers.pop(i, None)
+        if handle is not None:
+            handle.cancel()
+        inp = self._inputs[i]
+        if inp.follow is None:
+            return
+        self.sync()
+        self._release(i, inp)
+
+    def _release(self, i: int, inp: _Input) -> None:
+        inp.follow = None
+        self._followed.remove(i)
+        if inp.pending_at is not None:  # its confirmation becomes a clock event again
+            at, value = inp.pending_at, inp.pending_value
+            inp.pending_at = None
+            inp.pending = self._clock.schedule(at, lambda t: self._confirm(i, value, t))
+        if not self._followed:
+            Beat.of(self._clock).leave(self)
+
+    def _step(self, i: int, signal: DiscreteSource, now: int) -> None:
+        """lazy = False: apply the signal now and schedule its next edge."""
+        self._drivers.pop(i, None)
+        self.set_contact(i, bool(signal.value_at(now)), now)
+        at = signal.next_change(now)
+        if at is not None:
+            self._drivers[i] = self._clock.schedule(
+                max(at, now + 1), lambda t: self._step(i, signal, t)
+            )
+
+    # --- read time -----------------------------------------------------------
+
+    @property
+    def followed(self) -> int:
+        """How many inputs follow a signal at read time."""
+        return len(self._followed)
+
+    def sync(self) -> None:
+        """Catch the followed inputs up to the present (their edges and confirmations)."""
+        now = self._clock.now
+        if self._synced == now or not self._followed:
+            return
+        self._synced = now
+        for i in tuple(self._followed):
+            self._catch_up(i, self._inputs[i], now)
+
+    def _delay(self, value: bool) -> int:
+        return self._filter_ticks(value) * FILTER_BASE
+
+    def _catch_up(self, i: int, inp: _Input, now: int) -> None:
+        """The edges and confirmations of input ``i`` up to ``now``, in clock order."""
+        fol = inp.follow
+        assert fol is not None
+        signal = fol.signal
+        while True:
+            p, e = inp.pending_at, fol.next_edge
+            if p is not None and p <= now and (e is None or p <= e):
+                # scheduled at the edge, before the next edge: first at the same instant
+                inp.pending_at = None
+                value = inp.pending_value
+                self._confirm(i, value, p)
+                if value and fol.pulse is not None:
+                    self._jump(inp, fol, fol.pulse, inp.pending_edge, p, now)
+                continue
+            if e is None or e > now:
+                break
+            at = signal.next_change(e)
+            fol.next_edge = None if at is None else max(at, e + 1)
+            inp.contact = bool(signal.value_at(e))
+            self._update(i, e)
+            if inp.filtered and inp.since == e and fol.pulse is not None:  # no filter
+                self._jump(inp, fol, fol.pulse, e, e, now)
+        if fol.next_edge is None and inp.pending_at is None:
+            self._release(i, inp)  # nothing will change any more
+
+    def _jump(
+        self, inp: _Input, fol: _Follow, pulse: PulseTrain, rise: int, confirmed: int, now: int
+    ) -> None:
+        """Just after the rise at ``rise`` was confirmed: skip the whole periods before now.
+
+        In the steady regime (each state at least as long as its filter time), every
+        period adds one rise, one fall, two changes and the same two state durations
+        to an input: exactly what the edges one by one would leave.
+        """
+        period, high = pulse.period_us, pulse.high_us
+        low = period - high
+        if not 0 < high < period or inp.wiring is not Wiring.OK or fol.next_edge != rise + high:
+            return
+        f1, f0 = self._delay(True), self._delay(False)
+        if f1 > high or f0 > low or confirmed != rise + f1:
+            return
+        k = (now - confirmed) // period - 1
+        if k < 1:
+            return
+        on, off = high + f0 - f1, low - f0 + f1  # the filtered states' durations
+        inp.rise = (inp.rise + k) & MASK32
+        inp.fall = (inp.fall + k) & MASK32
+        inp.changes += 2 * k
+        inp.cumulated[1] += k * on
+        inp.cumulated[0] += k * off
+        inp.last[1], inp.last[0] = on // TICK, off // TICK
+        inp.since = confirmed + k * period
+        fol.next_edge = rise + k * period + high
 
     def wiring(self, i: int) -> Wiring:
         return self._inputs[i].wiring
@@ -100,11 +273,14 @@ class DigitalInputs:
         if inp.pending is not None:
             inp.pending.cancel()
             inp.pending = None
+        inp.pending_at = None
         if value == inp.filtered:
             return  # §4.1.1 the new state was not confirmed: nothing happened
         delay = self._filter_ticks(value) * FILTER_BASE
         if delay == 0:
             self._confirm(i, value, now)
+        elif inp.follow is not None:  # confirmed at read time
+            inp.pending_at, inp.pending_value, inp.pending_edge = now + delay, value, now
         else:
             inp.pending = self._clock.schedule(now + delay, lambda t: self._confirm(i, value, t))
 
@@ -129,6 +305,8 @@ class DigitalInputs:
 
     def bits(self, attr: str, word: int) -> int:
         """A 16-bit word of ``direct``, ``filtered`` or ``memorized`` bits."""
+        if self._followed:
+            self.sync()
         out = 0
         for bit, inp in enumerate(self._inputs[16 * word : 16 * word + 16]):
             if getattr(inp, attr):
@@ -137,6 +315,8 @@ class DigitalInputs:
 
     def restore_memorized(self, word: int) -> None:
         """§4.1.2 a master read: each input of ``word`` with changes toggles once."""
+        if self._followed:
+            self.sync()
         for inp in self._inputs[16 * word : 16 * word + 16]:
             if inp.changes > 0:
                 inp.memorized = not inp.memorized
@@ -144,12 +324,18 @@ class DigitalInputs:
 
     @property
     def changes_pending(self) -> bool:
+        if self._followed:
+            self.sync()
         return any(inp.changes for inp in self._inputs)
 
     def direct(self, i: int) -> bool:
+        if self._followed:
+            self.sync()
         return self._inputs[i].direct
 
     def filtered(self, i: int) -> bool:
+        if self._followed:
+            self.sync()
         return self._inputs[i].filtered
 
     @staticmethod
@@ -158,6 +344,8 @@ class DigitalInputs:
 
     def value32(self, kind: str, i: int, now: int) -> int:
         """counter_rise/fall, duration_0/1, cumulated_0/1 of input ``i``."""
+        if self._followed:
+            self.sync()
         inp = self._inputs[i]
         if kind == "counter_rise":
             return inp.rise
@@ -172,6 +360,8 @@ class DigitalInputs:
 
     def set_value32(self, kind: str, i: int, value: int, now: int) -> None:
         """A master write (§4.1.3 "Modbus master can reset counters")."""
+        if self._followed:
+            self.sync()
         inp = self._inputs[i]
         if kind == "counter_rise":
             inp.rise = value
@@ -189,3 +379,65 @@ class DigitalInputs:
             return
         extra = now - inp.since if running else 0
         inp.cumulated[state] = value * TICK - extra
+
+
+BEAT_US = S  # the beat's period: one clock event per simulated second
+CATCH_UP_US = 60 * S  # each followed input caught up at least this often
+
+
+class Beat:
+    """One per clock: an event every simulated second while inputs are followed.
+
+    It keeps the clock busy (a plant whose only activity is followed inputs runs at
+    ``--speed max`` as it did with an event per edge, and stops as before) and
+    catches the followed inputs of a slice of the TES up at each beat, so that each
+    is caught up at least once every CATCH_UP_US (a master read after a long quiet
+    spell never has hours of edges to go through).
+    """
+
+    def __init__(self, clock: SimClock) -> None:
+        self._clock = weakref.ref(clock)  # the clock holds its beat, not the other way
+        self._members: deque[DigitalInputs] = deque()
+        self._handle: Handle | None = None
+
+    @classmethod
+    def of(cls, clock: SimClock) -> Beat:
+        beat = _BEATS.get(clock)
+        if beat is None:
+            beat = _BEATS[clock] = cls(clock)
+        return beat
+
+    @property
+    def members(self) -> int:
+        return len(self._members)
+
+    def join(self, inputs: DigitalInputs) -> None:
+        if inputs not in self._members:
+            self._members.append(inputs)
+        clock = self._clock()
+        if self._handle is None and clock is not None:
+            self._handle = clock.schedule(clock.now + BEAT_US, self._beat)
+
+    def leave(self, inputs: DigitalInputs) -> None:
+        if inputs in self._members:
+            self._members.remove(inputs)
+        if not self._members and self._handle is not None:
+            self._handle.cancel()
+            self._handle = None
+
+    def _beat(self, now: int) -> None:
+        members = self._members
+        share = -(-len(members) * BEAT_US // CATCH_UP_US)  # ceil: all within CATCH_UP_US
+        for _ in range(share):
+            if not members:
+                break
+            inputs = members[0]
+            members.rotate(-1)
+            inputs.sync()  # may leave (nothing followed any more)
+        clock = self._clock()
+        self._handle = None
+        if members and clock is not None:
+            self._handle = clock.schedule(now + BEAT_US, self._beat)
+
+
+_BEATS: weakref.WeakKeyDictionary[SimClock, Beat] = weakref.WeakKeyDictionary()

@@ -28,8 +28,7 @@ from fieldtwin.signals import Constant
 from fieldtwin.tes import state
 from fieldtwin.tes.access import RegisterFile
 from fieldtwin.tes.analog import AnalogInputs, AnalogSource, dac_points
-from fieldtwin.tes.digital import DigitalInputs, Wiring
-from fieldtwin.tes.drivers import DiscreteDriver, DiscreteSource
+from fieldtwin.tes.digital import DigitalInputs, DiscreteSource, Wiring
 from fieldtwin.tes.eeprom import checked, mp_image
 from fieldtwin.tes.execute import SlaveAdapter
 from fieldtwin.tes.fallback import MasterWatch
@@ -97,7 +96,6 @@ class Tes:
         self.fault_surface = FaultSurface(
             self.model, self.line_faults, link, self.di, self.set_wiring, self
         )
-        self._drivers: dict[int, DiscreteDriver] = {}
         # the line-wide counts of the RTU line on each port (issue 15: once per frame)
         self._tallies: dict[str, LineTally] = {}
         self._boot(self._init_eeprom(slave))
@@ -364,7 +362,7 @@ class Tes:
             note = level_note(self.model, ref.index, value)
             self.ai.set_level(ref.index, float(value), now)
             return note
-        self._drop_driver(ref.index)
+        self.di.unfollow(ref.index)
         self.di.set_contact(ref.index, self._on_off(ref, value), now)
         return None
 
@@ -388,23 +386,13 @@ class Tes:
         ref = self._input(i, not digital)
         now = self.clock.now
         if not ref.analog:
-            self._drop_driver(ref.index)
-            source = cast(DiscreteSource, signal)
-            k = ref.index
-            driver = DiscreteDriver(self.clock, source, lambda v, t: self.di.set_contact(k, v, t))
-            self._drivers[k] = driver
-            driver.start(now)
+            self.di.follow(ref.index, cast(DiscreteSource, signal), now)
             return None
         note = None
         if isinstance(signal, Constant):  # a level given as a signal
             note = level_note(self.model, ref.index, signal.value)
         self.ai.set_signal(ref.index, signal, now)
         return note
-
-    def _drop_driver(self, i: int) -> None:
-        driver = self._drivers.pop(i, None)
-        if driver is not None:
-            driver.stop()
 
     # --- outputs -------------------------------------------------------------
 
