@@ -493,17 +493,24 @@ class Runner:
 
     def _paced_step(self, target: int | None, end: int | None, pace: _Pace) -> None:
         wall = self._wall
+        # a wall's lead (precise waits: wire-timed replies) runs a due instant that much
+        # wall time early; bytes that arrive are still timed by the wall as it is
+        lead: float = getattr(wall, "lead_s", 0.0)
         if target is None:
             timeout = MAX_WAIT_S
         else:
-            timeout = min(max(0.0, pace.wall_at(target) - wall.monotonic()), MAX_WAIT_S)
+            timeout = min(max(0.0, pace.wall_at(target) - lead - wall.monotonic()), MAX_WAIT_S)
         ready = self._handle(wall.wait(min(timeout, self._wait_cap())))
         reached = self._clamp(pace.sim_at(wall.monotonic()), end)
         if ready:
             if not self._settle(reached):
                 self._deliver(ready)
+        elif target is None:
+            self._settle(reached)
         else:
-            self._settle(reached if target is None else min(target, reached))
+            if lead and wall.monotonic() + lead >= pace.wall_at(target):
+                reached = max(reached, self._clamp(target, end))
+            self._settle(min(target, reached))
 
     def _fast_step(self, target: int | None, end: int | None, busy: bool) -> None:
         wall = self._wall

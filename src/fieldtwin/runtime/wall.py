@@ -27,6 +27,11 @@ Ready = tuple[Collection[int], Collection[int]]  # (readable fds, writable fds)
 # at most PRECISE_SPIN_S plus the kernel's one-millisecond rounding).
 PRECISE_SPIN_S = 0.0015
 PRECISE_NAP_S = 0.0001  # a nap between two polls: never a busy loop holding the GIL
+# Issue 15 item 2: while precise waits are wanted, the runner runs an instant this much
+# wall time before it is due, so that a reply written then reaches the master on a pty
+# at its instant: what the master's process and the pty's transfer take on the way
+# (about 0.2-0.5 ms at every baud rate on the machines measured; docs/modbus.md).
+PRECISE_LEAD_S = 0.00025
 # Issue 13: at ``--speed max`` the runner polls the descriptors between two instants
 # only once this much wall time has passed since the last poll (Runner, "fast"): a
 # select per instant was a quarter of the default plant's time.
@@ -102,6 +107,12 @@ class SystemWall:
     @property
     def precise(self) -> bool:
         return self._precise > 0
+
+    @property
+    def lead_s(self) -> float:
+        """How early (wall seconds) the runner may run a due instant: PRECISE_LEAD_S
+        while precise waits are wanted, else 0."""
+        return PRECISE_LEAD_S if self._precise > 0 else 0.0
 
     def wait(self, timeout: float | None) -> Ready:
         if not self._events:
