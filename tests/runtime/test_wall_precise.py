@@ -63,7 +63,6 @@ def test_a_wall_with_a_lead_has_a_due_instant_run_that_much_wall_time_early() ->
     """A wire-timed reply reaches a pty's master when its instant comes: the runner
     runs the instant the wall's lead early (docs/modbus.md, "Wire timing")."""
     from fieldtwin.clock import MS
-
     from tests.runtime.fake_wall import START, FakeLine, FakeWall
 
     class LeadingWall(FakeWall):
