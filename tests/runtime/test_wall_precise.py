@@ -73,7 +73,7 @@ def test_a_wall_with_a_lead_has_a_due_instant_run_that_much_wall_time_early() ->
         runner = Runner(clock, speed=1.0, wall=wall)
         runner.attach(FakeLine(fd=30), lambda data, now: None)  # a real line: paced
         ran: list[tuple[int, float]] = []
-        clock.schedule(10 * MS, lambda now: ran.append((now, wall.now - START)))
+        clock.schedule(10 * MS, lambda now, w=wall, r=ran: r.append((now, w.now - START)))
         runner.advance(20 * MS)
         assert ran[0][0] == 10 * MS  # the same instant in simulated time
         assert abs(ran[0][1] - (0.010 - early)) < 1e-9  # run at its wall time, minus the lead
