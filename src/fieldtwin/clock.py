@@ -71,6 +71,8 @@ class SimClock:
         self._seq = itertools.count()
         self._fired = 0
         self._cancelled = 0  # cancelled entries still in the heap
+        # one object per clock that devices share, by name (the TES inputs' beat)
+        self.shared: dict[str, Any] = {}
 
     @property
     def now(self) -> int:

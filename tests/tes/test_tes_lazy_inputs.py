@@ -177,3 +177,18 @@ def test_the_reference_has_an_event_per_edge() -> None:
     fired = tes.clock.fired
     tes.clock.advance(1 * S)
     assert tes.clock.fired - fired >= 400  # 200 edges and their 200 confirmations
+
+
+def test_a_tes_with_followed_inputs_is_freed_with_its_clock() -> None:
+    import gc
+    import weakref
+
+    clocks = []
+    for _ in range(3):
+        tes = Tes("TES 32EST")
+        tes.set_signal(0, PulseTrain(10_000), True)
+        tes.clock.advance(3 * S)
+        clocks.append(weakref.ref(tes.clock))
+        del tes
+    gc.collect()
+    assert all(ref() is None for ref in clocks)  # the beat lives on its clock, not beside it

@@ -20,7 +20,6 @@ reference, tests/tes/test_tes_lazy_inputs.py).
 from __future__ import annotations
 
 import enum
-import weakref
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -396,15 +395,16 @@ class Beat:
     """
 
     def __init__(self, clock: SimClock) -> None:
-        self._clock = weakref.ref(clock)  # the clock holds its beat, not the other way
+        self._clock = clock
         self._members: deque[DigitalInputs] = deque()
         self._handle: Handle | None = None
 
     @classmethod
     def of(cls, clock: SimClock) -> Beat:
-        beat = _BEATS.get(clock)
+        beat = clock.shared.get("tes.beat")
         if beat is None:
-            beat = _BEATS[clock] = cls(clock)
+            beat = clock.shared["tes.beat"] = cls(clock)
+        assert isinstance(beat, Beat)
         return beat
 
     @property
@@ -414,9 +414,8 @@ class Beat:
     def join(self, inputs: DigitalInputs) -> None:
         if inputs not in self._members:
             self._members.append(inputs)
-        clock = self._clock()
-        if self._handle is None and clock is not None:
-            self._handle = clock.schedule(clock.now + BEAT_US, self._beat)
+        if self._handle is None:
+            self._handle = self._clock.schedule(self._clock.now + BEAT_US, self._beat)
 
     def leave(self, inputs: DigitalInputs) -> None:
         if inputs in self._members:
@@ -434,10 +433,4 @@ class Beat:
             inputs = members[0]
             members.rotate(-1)
             inputs.sync()  # may leave (nothing followed any more)
-        clock = self._clock()
-        self._handle = None
-        if members and clock is not None:
-            self._handle = clock.schedule(now + BEAT_US, self._beat)
-
-
-_BEATS: weakref.WeakKeyDictionary[SimClock, Beat] = weakref.WeakKeyDictionary()
+        self._handle = self._clock.schedule(now + BEAT_US, self._beat) if members else None
