@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from fieldtwin.clock import MS, Handle, SimClock
 from fieldtwin.errors import ConfigError
 from fieldtwin.signals import AnalogSignal, DiscreteSignal
+from fieldtwin.signals.base import SteppedSignal
 from fieldtwin.tsx.dem24.crossing import next_event
 
 CHANNELS = 24
@@ -53,9 +54,22 @@ def check_channel(channel: int) -> int:
 
 
 class _Channel:
-    __slots__ = ("edge_t", "level", "pending", "raw", "signal", "signal_handle", "stamp")
+    __slots__ = (
+        "confirm",
+        "edge_t",
+        "follow",
+        "level",
+        "pending",
+        "raw",
+        "signal",
+        "signal_handle",
+        "stamp",
+        "step",
+    )
 
-    def __init__(self) -> None:
+    def __init__(self, follow: Callback, confirm: Callback) -> None:
+        self.follow = follow  # the clock callbacks of this channel, made once
+        self.confirm = confirm
         self.raw = False  # at the terminals
         self.level = False  # after the filters
         self.pending: Handle | None = None
@@ -63,13 +77,22 @@ class _Channel:
         self.stamp: int | None = None
         self.signal: InputSignal | None = None
         self.signal_handle: Handle | None = None
+        self.step: Callable[[int], tuple[bool, int | None]] | None = None
 
 
+Callback = Callable[[int], None]
 Accept = Callable[[int, bool, int, int | None, int], None]  # channel, level, edge, stamp, now
 
 
 class InputBank:
-    """Raw levels, filters and accepted levels of the 24 channels."""
+    """Raw levels, filters and accepted levels of the 24 channels.
+
+    ``stepped``: a discrete signal that answers its value and next change in one call
+    (:class:`~fieldtwin.signals.base.SteppedSignal`) is asked once per edge; False
+    (the reference of the tests) asks ``value_at`` and ``next_change`` as before.
+    """
+
+    stepped = True
 
     def __init__(
         self,
@@ -82,7 +105,10 @@ class InputBank:
         self.thresholds = thresholds
         self._stamp = stamp
         self._accept = accept
-        self._ch = [_Channel() for _ in range(CHANNELS)]
+        self._ch = [
+            _Channel(self._follower(channel), self._confirmer(channel))
+            for channel in range(CHANNELS)
+        ]
         self.active = False  # module operational and inputs readable
         self.filter_us = HARDWARE_FILTER_US
         self.supply_ok = True  # without field supply every input reads 0
@@ -124,23 +150,35 @@ class InputBank:
             ch.signal_handle.cancel()
             ch.signal_handle = None
         ch.signal = signal
+        ch.step = (
+            signal.value_and_next if self.stepped and isinstance(signal, SteppedSignal) else None
+        )
         if signal is not None:
             self._follow(channel, self.clock.now)
 
+    def _follower(self, channel: int) -> Callback:
+        return lambda now: self._follow(channel, now)
+
+    def _confirmer(self, channel: int) -> Callback:
+        return lambda now: self._confirm(channel, now)
+
     def _follow(self, channel: int, t: int) -> None:
         ch = self._ch[channel]
-        assert ch.signal is not None
-        value = ch.signal.value_at(t)
-        self.set_value(channel, value, t)
-        if isinstance(value, bool):
-            nxt = ch.signal.next_change(t)
-        else:  # volts: judged at the instant they cross a type 1 limit (7.2)
-            nxt = next_event(ch.signal, t, ch.raw, self.thresholds)  # type: ignore[arg-type]
-        ch.signal_handle = (
-            None
-            if nxt is None
-            else self.clock.schedule(nxt, lambda now: self._follow(channel, now))
-        )
+        step = ch.step
+        if step is not None:  # set_raw, with the next change found by the same search
+            value, nxt = step(t)
+            if ch.raw != value:
+                ch.raw = value
+                self._edge(channel, t)
+        else:
+            assert ch.signal is not None
+            value = ch.signal.value_at(t)
+            self.set_value(channel, value, t)
+            if isinstance(value, bool):
+                nxt = ch.signal.next_change(t)
+            else:  # volts: judged at the instant they cross a type 1 limit (7.2)
+                nxt = next_event(ch.signal, t, ch.raw, self.thresholds)  # type: ignore[arg-type]
+        ch.signal_handle = None if nxt is None else self.clock.schedule(nxt, ch.follow)
 
     # --- the filters ----------------------------------------------------------------
 
@@ -149,20 +187,20 @@ class InputBank:
 
     def _edge(self, channel: int, t: int) -> None:
         ch = self._ch[channel]
-        if ch.pending is not None:
-            ch.pending.cancel()  # a pulse shorter than the filter is rejected
+        pending = ch.pending
+        if pending is not None:
+            pending.cancel()  # a pulse shorter than the filter is rejected
             ch.pending = None
-        if not self.active or self._effective(ch) == ch.level:
+        # _effective(ch) inlined
+        if not self.active or (ch.raw and self.supply_ok) == ch.level:
             return
         ch.edge_t, ch.stamp = t, self._stamp(t)  # stamped at the edge (manual-notes)
-        ch.pending = self.clock.schedule(
-            t + self.filter_us, lambda now: self._confirm(channel, now)
-        )
+        ch.pending = self.clock.schedule(t + self.filter_us, ch.confirm)
 
     def _confirm(self, channel: int, now: int) -> None:
         ch = self._ch[channel]
         ch.pending = None
-        ch.level = level = self._effective(ch)
+        ch.level = level = ch.raw and self.supply_ok  # _effective(ch)
         self._levels = self._levels | (1 << channel) if level else self._levels & ~(1 << channel)
         self._accept(channel, ch.level, ch.edge_t, ch.stamp, now)
 
