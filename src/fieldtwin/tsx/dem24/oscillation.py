@@ -120,7 +120,7 @@ class Monitor:
     ``normal(channel, now)`` is called when an input is normal again (AMB-DEM-11).
     """
 
-    __slots__ = ("_handles", "_normal", "_schedule", "detectors")
+    __slots__ = ("_checks", "_handles", "_normal", "_schedule", "detectors")
 
     def __init__(
         self,
@@ -131,6 +131,7 @@ class Monitor:
     ) -> None:
         self.detectors = [Detector(thresholds) for _ in range(channels)]
         self._handles: list[Handle | None] = [None] * channels
+        self._checks = [self._checker(channel) for channel in range(channels)]
         self._schedule = schedule
         self._normal = normal
 
@@ -155,14 +156,16 @@ class Monitor:
                 handle.cancel()
         self._handles = [None] * len(self.detectors)
 
+    def _checker(self, channel: int) -> Callable[[int], None]:
+        return lambda now: self._check(channel, now)
+
     def _arm(self, channel: int) -> None:
-        handle = self._handles[channel]
+        handles = self._handles
+        handle = handles[channel]
         if handle is not None:
             handle.cancel()
         at = self.detectors[channel].next_check()
-        self._handles[channel] = (
-            None if at is None else self._schedule(at, lambda now: self._check(channel, now))
-        )
+        handles[channel] = None if at is None else self._schedule(at, self._checks[channel])
 
     def _check(self, channel: int, now: int) -> None:
         self._handles[channel] = None
