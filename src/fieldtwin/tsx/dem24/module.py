@@ -79,6 +79,9 @@ class Dem24(IntelligentModule):
     fault_string_bytes = 12  # DEM 4.3: 96 bits
     terminal_block_fault_bit = FB_TERMINAL
     plc_limit = ("time-stamping modules", 32)  # DEM 6.2-2 note: 32 in one PLC configuration
+    # After an accepted edge, write only what an edge changes (_refresh_edge); False
+    # (the reference of the tests) recomputes every word and bit (_refresh_words).
+    edge_refresh = True
 
     def __init__(
         self,
@@ -345,11 +348,15 @@ class Dem24(IntelligentModule):
     def _accepted(self, channel: int, level: bool, edge: int, stamp: int | None, now: int) -> None:
         self.edges_stamped += 1
         state = int(level)
-        if self.oscillation is not None:
-            state = self.oscillation.judge(channel, edge, state)  # DEM 2.3-3
+        oscillation = self.oscillation
+        if oscillation is not None:
+            state = oscillation.judge(channel, edge, state)  # DEM 2.3-3
         if state >= 0:
             self._log_change(channel, state, stamp)
-        self._refresh_words()
+        if self.edge_refresh:
+            self._refresh_edge()
+        else:
+            self._refresh_words()
 
     def _normal_again(self, channel: int, now: int) -> None:
         """An oscillating input is normal again: its state (AMB-DEM-11)."""
@@ -434,6 +441,31 @@ class Dem24(IntelligentModule):
     def _readable(self) -> bool:
         """Inputs read: terminal block fitted, monitored supply present (DEM 2.5-6)."""
         return self.terminal_block and (self.supply or not self.config.supply_monitoring)
+
+    def _refresh_edge(self) -> None:
+        """``_refresh_words`` after an accepted edge: what an edge can change, written as
+        ``_refresh_words`` writes it.  An edge changes the levels (IWxy,6/7) and, when
+        logged, the stack count (IWxy,5) and with it the stack bits of Ixy,0..7;
+        IWxy,2 depends on nothing an edge changes (configuration, global stop, time
+        base, supply fault), and every change of those refreshes all the words."""
+        if self._mode.state is ModuleState.OFF:
+            return
+        stack = self.logbook.stack
+        count = len(stack)
+        iw = self._iw
+        # self.image(), inlined
+        config = self.config
+        readable = self.terminal_block and (self.supply or not config.supply_monitoring)
+        image = self.inputs.levels() if readable or config.maintain else 0
+        low, high = image & 0xFFFF, image >> 16
+        if iw[5] != count:
+            iw[5:8] = count, low, high
+            timebase = self.logbook.timebase
+            self.i_bits = input_bits(
+                timebase.ready, count, stack.full, timebase.fault, self.pulse_image
+            )
+        elif iw[6] != low or iw[7] != high:
+            iw[5:8] = count, low, high
 
     def _refresh_words(self) -> None:
         if self._mode.state is ModuleState.OFF:
