@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 
 from fieldtwin.clock import MS, Handle, SimClock
 from fieldtwin.errors import ConfigError
@@ -157,10 +158,10 @@ class InputBank:
             self._follow(channel, self.clock.now)
 
     def _follower(self, channel: int) -> Callback:
-        return lambda now: self._follow(channel, now)
+        return partial(self._follow, channel)  # now -> self._follow(channel, now)
 
     def _confirmer(self, channel: int) -> Callback:
-        return lambda now: self._confirm(channel, now)
+        return partial(self._confirm, channel)
 
     def _follow(self, channel: int, t: int) -> None:
         ch = self._ch[channel]

@@ -351,12 +351,15 @@ class Dem24(IntelligentModule):
         oscillation = self.oscillation
         if oscillation is not None:
             state = oscillation.judge(channel, edge, state)  # DEM 2.3-3
-        if state >= 0:
-            self._log_change(channel, state, stamp)
-        if self.edge_refresh:
-            self._refresh_edge()
-        else:
+        if not self.edge_refresh:
+            if state >= 0:
+                self._log_change(channel, state, stamp)
             self._refresh_words()
+        elif state >= 0:
+            self._log_change(channel, state, stamp)
+            self._refresh_edge(True)
+        else:
+            self._refresh_edge(False)  # nothing logged: the stack count is as it was
 
     def _normal_again(self, channel: int, now: int) -> None:
         """An oscillating input is normal again: its state (AMB-DEM-11)."""
@@ -442,22 +445,26 @@ class Dem24(IntelligentModule):
         """Inputs read: terminal block fitted, monitored supply present (DEM 2.5-6)."""
         return self.terminal_block and (self.supply or not self.config.supply_monitoring)
 
-    def _refresh_edge(self) -> None:
+    def _refresh_edge(self, logged: bool) -> None:
         """``_refresh_words`` after an accepted edge: what an edge can change, written as
         ``_refresh_words`` writes it.  An edge changes the levels (IWxy,6/7) and, when
-        logged, the stack count (IWxy,5) and with it the stack bits of Ixy,0..7;
+        ``logged``, the stack count (IWxy,5) and with it the stack bits of Ixy,0..7;
         IWxy,2 depends on nothing an edge changes (configuration, global stop, time
         base, supply fault), and every change of those refreshes all the words."""
         if self._mode.state is ModuleState.OFF:
             return
-        stack = self.logbook.stack
-        count = len(stack)
         iw = self._iw
         # self.image(), inlined
         config = self.config
         readable = self.terminal_block and (self.supply or not config.supply_monitoring)
         image = self.inputs.levels() if readable or config.maintain else 0
         low, high = image & 0xFFFF, image >> 16
+        if not logged:
+            if iw[6] != low or iw[7] != high:
+                iw[5:8] = iw[5], low, high
+            return
+        stack = self.logbook.stack
+        count = len(stack)
         if iw[5] != count:
             iw[5:8] = count, low, high
             timebase = self.logbook.timebase

@@ -16,6 +16,7 @@ import enum
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 
 from fieldtwin.clock import Handle, S
 from fieldtwin.fsm import Machine, Table
@@ -139,10 +140,11 @@ class Monitor:
         """The state to log for a change at ``edge``: ``state``, 2 = oscillating, or -1
         while oscillating (DEM 2.3-3 "its transitions will no longer be indicated")."""
         detector = self.detectors[channel]
-        if detector.transition(edge):
-            state = STATE_OSCILLATING
-        elif detector.machine.state is OscState.OSCILLATING:
+        if detector.machine.state is OscState.OSCILLATING:
+            detector._times.append(edge)  # transition(edge), which is False while oscillating
             state = -1
+        elif detector.transition(edge):
+            state = STATE_OSCILLATING
         self._arm(channel)
         return state
 
@@ -157,7 +159,7 @@ class Monitor:
         self._handles = [None] * len(self.detectors)
 
     def _checker(self, channel: int) -> Callable[[int], None]:
-        return lambda now: self._check(channel, now)
+        return partial(self._check, channel)  # now -> self._check(channel, now)
 
     def _arm(self, channel: int) -> None:
         handles = self._handles
