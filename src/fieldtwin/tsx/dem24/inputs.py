@@ -170,7 +170,14 @@ class InputBank:
             value, nxt = step(t)
             if ch.raw != value:
                 ch.raw = value
-                self._edge(channel, t)
+                # self._edge(channel, t), inlined
+                pending = ch.pending
+                if pending is not None:
+                    pending.cancel()  # a pulse shorter than the filter is rejected
+                    ch.pending = None
+                if self.active and (value and self.supply_ok) != ch.level:
+                    ch.edge_t, ch.stamp = t, self._stamp(t)  # stamped at the edge
+                    ch.pending = self.clock.schedule(t + self.filter_us, ch.confirm)
         else:
             assert ch.signal is not None
             value = ch.signal.value_at(t)

@@ -140,13 +140,25 @@ class Monitor:
         """The state to log for a change at ``edge``: ``state``, 2 = oscillating, or -1
         while oscillating (DEM 2.3-3 "its transitions will no longer be indicated")."""
         detector = self.detectors[channel]
-        if detector.machine.state is OscState.OSCILLATING:
-            detector._times.append(edge)  # transition(edge), which is False while oscillating
-            state = -1
-        elif detector.transition(edge):
-            state = STATE_OSCILLATING
-        self._arm(channel)
-        return state
+        if detector.machine.state is not OscState.OSCILLATING:
+            if detector.transition(edge):
+                state = STATE_OSCILLATING
+            self._arm(channel)
+            return state
+        # oscillating: transition(edge) (False), then _arm(channel) with next_check()
+        # inlined, the same handle cancelled and the same check scheduled
+        times = detector._times
+        times.append(edge)
+        handles = self._handles
+        handle = handles[channel]
+        if handle is not None:
+            handle.cancel()
+        th = detector.thresholds
+        n_min = th.n_min
+        at = times[-n_min] + th.t_min_us if len(times) >= n_min else 0
+        declared = detector.declared_at + 1
+        handles[channel] = self._schedule(at if at >= declared else declared, self._checks[channel])
+        return -1
 
     def oscillating(self) -> int:
         """Bit i set while input i is oscillating (DEM 4.2-2 overall-state message)."""
