@@ -79,9 +79,11 @@ class Dem24(IntelligentModule):
     fault_string_bytes = 12  # DEM 4.3: 96 bits
     terminal_block_fault_bit = FB_TERMINAL
     plc_limit = ("time-stamping modules", 32)  # DEM 6.2-2 note: 32 in one PLC configuration
-    # After an accepted edge, write only what an edge changes (_refresh_edge); False
-    # (the reference of the tests) recomputes every word and bit (_refresh_words).
-    edge_refresh = True
+    # The shortcuts of the per-edge and per-message path: after an accepted edge only
+    # what an edge changes is written (_refresh_edge), the stack-full fault is set
+    # only when it changes (_stack_fault).  False (the reference of the tests, issue
+    # 15): every word and bit recomputed (_refresh_words), set_fault at every message.
+    shortcuts = True
 
     def __init__(
         self,
@@ -351,7 +353,7 @@ class Dem24(IntelligentModule):
         oscillation = self.oscillation
         if oscillation is not None:
             state = oscillation.judge(channel, edge, state)  # DEM 2.3-3
-        if not self.edge_refresh:
+        if not self.shortcuts:
             if state >= 0:
                 self._log_change(channel, state, stamp)
             self._refresh_words()
@@ -407,7 +409,17 @@ class Dem24(IntelligentModule):
     def _log(self, message_type: MessageType, stamp: int | None, body: Body) -> None:
         if stamp is None or not self.logging or self.state is not ModuleState.OPERATIONAL:
             return
-        self.set_fault(FB_STACK_FULL, self.logbook.push(message_type, stamp, body))
+        self._stack_fault(self.logbook.push(message_type, stamp, body))
+
+    def _stack_fault(self, full: bool) -> None:
+        """``set_fault(FB_STACK_FULL, full)`` (DEM 4.3), at every message logged or read.
+
+        With ``shortcuts``, skipped while the fault already is ``full``: the latch
+        then stays as it is and IWxy,0, refreshed after every change of what it shows,
+        reads the same (set_fault would recompute it, and mark the bus face changed)."""
+        if self.shortcuts and full == self.fault_active(FB_STACK_FULL):
+            return
+        self.set_fault(FB_STACK_FULL, full)
 
     def _log_change(self, channel: int, state: int, stamp: int | None) -> None:
         if channel < CHANNELS and not (self.selected() >> channel) & 1:
@@ -429,7 +441,7 @@ class Dem24(IntelligentModule):
     def read_messages(self, count: int) -> list[Message]:
         """Remove and return up to ``count`` messages, oldest first (DEM 4.2-3)."""
         messages = self.logbook.read(count)
-        self.set_fault(FB_STACK_FULL, self.stack.full)
+        self._stack_fault(self.stack.full)
         self._refresh_words()
         return messages
 
