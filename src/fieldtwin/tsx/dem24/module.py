@@ -442,7 +442,10 @@ class Dem24(IntelligentModule):
         """Remove and return up to ``count`` messages, oldest first (DEM 4.2-3)."""
         messages = self.logbook.read(count)
         self._stack_fault(self.stack.full)
-        self._refresh_words()
+        if self.shortcuts:
+            self._refresh_edge(True)  # a read changes the stack count only
+        else:
+            self._refresh_words()
         return messages
 
     # --- words and bits ------------------------------------------------------------
@@ -458,11 +461,12 @@ class Dem24(IntelligentModule):
         return self.terminal_block and (self.supply or not self.config.supply_monitoring)
 
     def _refresh_edge(self, logged: bool) -> None:
-        """``_refresh_words`` after an accepted edge: what an edge can change, written as
-        ``_refresh_words`` writes it.  An edge changes the levels (IWxy,6/7) and, when
-        ``logged``, the stack count (IWxy,5) and with it the stack bits of Ixy,0..7;
-        IWxy,2 depends on nothing an edge changes (configuration, global stop, time
-        base, supply fault), and every change of those refreshes all the words."""
+        """``_refresh_words`` after an accepted edge or a read of messages: what they can
+        change, written as ``_refresh_words`` writes it.  An edge changes the levels
+        (IWxy,6/7) and, when ``logged``, the stack count (IWxy,5) and with it the stack
+        bits of Ixy,0..7, as a read does; IWxy,2 depends on nothing they change
+        (configuration, global stop, time base, supply fault), and every change of
+        those refreshes all the words."""
         if self._mode.state is ModuleState.OFF:
             return
         iw = self._iw
