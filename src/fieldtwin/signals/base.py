@@ -111,7 +111,8 @@ class UniformStream:
 
     def __call__(self, index: int) -> float:
         digest = _blake2b(self._prefix + b"%d" % index, digest_size=16).digest()
-        return (_LOW_64(digest)[0] + 0.5) / _TWO_64
+        raw: int = _LOW_64(digest)[0]
+        return (raw + 0.5) / _TWO_64
 
 
 def gauss(seed: int, stream: str, index: int) -> float:

@@ -167,8 +167,8 @@ class RandomEdges:
             last += minimum + round(-log(draw(index)) * spread)
             append(last)
             index += 1
-        for index in range(index, index + REACH_AHEAD):  # a few more: fewer calls
-            last += minimum + round(-log(draw(index)) * spread)
+        for ahead in range(index, index + REACH_AHEAD):  # a few more: fewer calls
+            last += minimum + round(-log(draw(ahead)) * spread)
             append(last)
 
     def value_at(self, t: int) -> bool:

@@ -167,15 +167,15 @@ class InputBank:
         ch = self._ch[channel]
         step = ch.step
         if step is not None:  # set_raw, with the next change found by the same search
-            value, nxt = step(t)
-            if ch.raw != value:
-                ch.raw = value
+            level, nxt = step(t)
+            if ch.raw != level:
+                ch.raw = level
                 # self._edge(channel, t), inlined
                 pending = ch.pending
                 if pending is not None:
                     pending.cancel()  # a pulse shorter than the filter is rejected
                     ch.pending = None
-                if self.active and (value and self.supply_ok) != ch.level:
+                if self.active and (level and self.supply_ok) != ch.level:
                     ch.edge_t, ch.stamp = t, self._stamp(t)  # stamped at the edge
                     ch.pending = self.clock.schedule(t + self.filter_us, ch.confirm)
         else:

@@ -81,8 +81,10 @@ class Dem24(IntelligentModule):
     plc_limit = ("time-stamping modules", 32)  # DEM 6.2-2 note: 32 in one PLC configuration
     # The shortcuts of the per-edge and per-message path: after an accepted edge only
     # what an edge changes is written (_refresh_edge), the stack-full fault is set
-    # only when it changes (_stack_fault).  False (the reference of the tests, issue
-    # 15): every word and bit recomputed (_refresh_words), set_fault at every message.
+    # only when it changes (_stack_fault), an oscillating input's check is armed
+    # inline (Monitor.inline).  False (the reference of the tests, issue 15): every
+    # word and bit recomputed (_refresh_words), set_fault at every message,
+    # Detector.transition and Monitor._arm at every edge.
     shortcuts = True
 
     def __init__(
@@ -260,7 +262,9 @@ class Dem24(IntelligentModule):
             )
             # its checks on the clock itself (one per edge of an oscillating input, not
             # worth the bookkeeping of call_at): on_power_off cancels them
-            self.oscillation = Monitor(th, CHANNELS, self.clock.schedule, self._normal_again)
+            self.oscillation = Monitor(
+                th, CHANNELS, self.clock.schedule, self._normal_again, inline=self.shortcuts
+            )
         monitored = config.supply_monitoring and not self.supply
         if monitored != self.fault_active(FB_SUPPLY):
             self._fault_input(FB_SUPPLY, CH_SUPPLY, monitored)

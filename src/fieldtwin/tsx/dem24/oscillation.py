@@ -121,7 +121,7 @@ class Monitor:
     ``normal(channel, now)`` is called when an input is normal again (AMB-DEM-11).
     """
 
-    __slots__ = ("_checks", "_handles", "_normal", "_schedule", "detectors")
+    __slots__ = ("_checks", "_handles", "_normal", "_schedule", "detectors", "inline")
 
     def __init__(
         self,
@@ -129,7 +129,12 @@ class Monitor:
         channels: int,
         schedule: Schedule,
         normal: Callable[[int, int], None],
+        *,
+        inline: bool = True,
     ) -> None:
+        # inline: an edge of an oscillating input is counted and its check armed in
+        # judge itself (False, the reference of the tests: transition and _arm)
+        self.inline = inline
         self.detectors = [Detector(thresholds) for _ in range(channels)]
         self._handles: list[Handle | None] = [None] * channels
         self._checks = [self._checker(channel) for channel in range(channels)]
@@ -140,9 +145,11 @@ class Monitor:
         """The state to log for a change at ``edge``: ``state``, 2 = oscillating, or -1
         while oscillating (DEM 2.3-3 "its transitions will no longer be indicated")."""
         detector = self.detectors[channel]
-        if detector.machine.state is not OscState.OSCILLATING:
+        if not self.inline or detector.machine.state is not OscState.OSCILLATING:
             if detector.transition(edge):
                 state = STATE_OSCILLATING
+            elif detector.machine.state is OscState.OSCILLATING:
+                state = -1
             self._arm(channel)
             return state
         # oscillating: transition(edge) (False), then _arm(channel) with next_check()
