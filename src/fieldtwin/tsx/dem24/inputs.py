@@ -103,6 +103,7 @@ class InputBank:
         accept: Accept,
     ) -> None:
         self.clock = clock
+        self._schedule = clock.schedule
         self.thresholds = thresholds
         self._stamp = stamp
         self._accept = accept
@@ -113,7 +114,8 @@ class InputBank:
         self.active = False  # module operational and inputs readable
         self.filter_us = HARDWARE_FILTER_US
         self.supply_ok = True  # without field supply every input reads 0
-        self._levels = 0  # the accepted levels, bit i = channel i (IWxy,6/7)
+        # the accepted levels, bit i = channel i (IWxy,6/7); read it, never write it
+        self.level_bits = 0
 
     def set_filter_ms(self, filt_ms: int) -> None:
         self.filter_us = max(HARDWARE_FILTER_US, filt_ms * MS)
@@ -125,7 +127,7 @@ class InputBank:
         return self._ch[channel].level
 
     def levels(self) -> int:
-        return self._levels
+        return self.level_bits
 
     # --- the terminals ------------------------------------------------------------
 
@@ -168,6 +170,7 @@ class InputBank:
         step = ch.step
         if step is not None:  # set_raw, with the next change found by the same search
             level, nxt = step(t)
+            schedule = self._schedule
             if ch.raw != level:
                 ch.raw = level
                 # self._edge(channel, t), inlined
@@ -177,16 +180,17 @@ class InputBank:
                     ch.pending = None
                 if self.active and (level and self.supply_ok) != ch.level:
                     ch.edge_t, ch.stamp = t, self._stamp(t)  # stamped at the edge
-                    ch.pending = self.clock.schedule(t + self.filter_us, ch.confirm)
-        else:
-            assert ch.signal is not None
-            value = ch.signal.value_at(t)
-            self.set_value(channel, value, t)
-            if isinstance(value, bool):
-                nxt = ch.signal.next_change(t)
-            else:  # volts: judged at the instant they cross a type 1 limit (7.2)
-                nxt = next_event(ch.signal, t, ch.raw, self.thresholds)  # type: ignore[arg-type]
-        ch.signal_handle = None if nxt is None else self.clock.schedule(nxt, ch.follow)
+                    ch.pending = schedule(t + self.filter_us, ch.confirm)
+            ch.signal_handle = None if nxt is None else schedule(nxt, ch.follow)
+            return
+        assert ch.signal is not None
+        value = ch.signal.value_at(t)
+        self.set_value(channel, value, t)
+        if isinstance(value, bool):
+            nxt = ch.signal.next_change(t)
+        else:  # volts: judged at the instant they cross a type 1 limit (7.2)
+            nxt = next_event(ch.signal, t, ch.raw, self.thresholds)  # type: ignore[arg-type]
+        ch.signal_handle = None if nxt is None else self._schedule(nxt, ch.follow)
 
     # --- the filters ----------------------------------------------------------------
 
@@ -209,7 +213,7 @@ class InputBank:
         ch = self._ch[channel]
         ch.pending = None
         ch.level = level = ch.raw and self.supply_ok  # _effective(ch)
-        self._levels = self._levels | (1 << channel) if level else self._levels & ~(1 << channel)
+        self.level_bits = self.level_bits | (1 << channel) if level else self.level_bits & ~(1 << channel)
         self._accept(channel, ch.level, ch.edge_t, ch.stamp, now)
 
     def supply(self, ok: bool, t: int) -> None:
@@ -226,7 +230,7 @@ class InputBank:
             value = self._effective(ch)
             if value != ch.level:
                 ch.level = value
-                self._levels ^= 1 << channel
+                self.level_bits ^= 1 << channel
                 if not silent:
                     self._accept(channel, value, now, self._stamp(now), now)
 
@@ -241,4 +245,4 @@ class InputBank:
     def reset_levels(self) -> None:
         for ch in self._ch:
             ch.level = False
-        self._levels = 0
+        self.level_bits = 0

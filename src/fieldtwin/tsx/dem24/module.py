@@ -477,11 +477,13 @@ class Dem24(IntelligentModule):
         # self.image(), inlined
         config = self.config
         readable = self.terminal_block and (self.supply or not config.supply_monitoring)
-        image = self.inputs.levels() if readable or config.maintain else 0
+        image = self.inputs.level_bits if readable or config.maintain else 0
         low, high = image & 0xFFFF, image >> 16
-        if not logged:
-            if iw[6] != low or iw[7] != high:
-                iw[5:8] = iw[5], low, high
+        if not logged:  # the same words as iw[5:8] = count, low, high (count as it was)
+            if iw[6] != low:
+                iw[6] = low
+            if iw[7] != high:
+                iw[7] = high
             return
         stack = self.logbook.stack
         count = len(stack)
