@@ -80,7 +80,6 @@ def check_fraction(name: str, value: float) -> None:
 # --- seeded draws ----------------------------------------------------------------------
 
 _TWO_64 = float(1 << 64)
-_blake2b = hashlib.blake2b
 
 
 def _digest(seed: int, stream: str, index: int) -> bytes:
@@ -100,18 +99,20 @@ _LOW_64 = struct.Struct("<Q").unpack_from  # the first 8 bytes, little-endian
 class UniformStream:
     """``uniform(seed, stream, index)`` for one (seed, stream) and whole ``index``, faster.
 
-    The key's prefix is encoded once; the digest of prefix + index is the same bytes
-    as :func:`_digest`'s, so every draw is bit-identical to :func:`uniform`'s.
+    The hash of the key's prefix is computed once and copied for each draw; the
+    digest of prefix + index is the same bytes as :func:`_digest`'s, so every draw is
+    bit-identical to :func:`uniform`'s.
     """
 
     __slots__ = ("_prefix",)
 
     def __init__(self, seed: int, stream: str) -> None:
-        self._prefix = f"{seed}:{stream}:".encode()
+        self._prefix = hashlib.blake2b(f"{seed}:{stream}:".encode(), digest_size=16)
 
     def __call__(self, index: int) -> float:
-        digest = _blake2b(self._prefix + b"%d" % index, digest_size=16).digest()
-        raw: int = _LOW_64(digest)[0]
+        h = self._prefix.copy()
+        h.update(str(index).encode())  # f"{index}", as _digest writes it
+        raw: int = _LOW_64(h.digest())[0]
         return (raw + 0.5) / _TWO_64
 
 

@@ -213,7 +213,8 @@ class InputBank:
         ch = self._ch[channel]
         ch.pending = None
         ch.level = level = ch.raw and self.supply_ok  # _effective(ch)
-        self.level_bits = self.level_bits | (1 << channel) if level else self.level_bits & ~(1 << channel)
+        bits = self.level_bits
+        self.level_bits = bits | (1 << channel) if level else bits & ~(1 << channel)
         self._accept(channel, ch.level, ch.edge_t, ch.stamp, now)
 
     def supply(self, ok: bool, t: int) -> None:
