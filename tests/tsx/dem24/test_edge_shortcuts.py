@@ -178,6 +178,7 @@ def _apply(plc: Plc, mod: Dem24, kind: str, arg: Any) -> None:
 @settings(max_examples=80, deadline=None)
 @given(st.lists(_step, min_size=1, max_size=20))
 @example([("random", (5, 1, 6_000)), ("supply", False), ("advance", 300_000), ("supply", True)])
+@example([("power", 0.3), ("read", 5), ("faults", 0), ("long", 3), ("read", 1)])  # self-test
 @example([("config", (15, 10, 1, 2, 1, 2)), ("random", (7, 2, 6_000)), ("supply", False)])
 @example([("flood", 250), ("read", 9), ("fine", 3), ("read_txt", 0), ("flood", 150)])
 @example([("random", (2, 5, 2_000)), ("long", 2), ("flood", 220), ("read", 30), ("long", 3)])

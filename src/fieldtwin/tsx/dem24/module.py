@@ -418,10 +418,15 @@ class Dem24(IntelligentModule):
     def _stack_fault(self, full: bool) -> None:
         """``set_fault(FB_STACK_FULL, full)`` (DEM 4.3), at every message logged or read.
 
-        With ``shortcuts``, skipped while the fault already is ``full``: the latch
-        then stays as it is and IWxy,0, refreshed after every change of what it shows,
-        reads the same (set_fault would recompute it, and mark the bus face changed)."""
-        if self.shortcuts and full == self.fault_active(FB_STACK_FULL):
+        With ``shortcuts``, skipped while operational and the fault already is
+        ``full``: the latch then stays as it is and IWxy,0, refreshed after every change
+        of what it shows, reads the same (set_fault would recompute it, and mark the
+        bus face changed)."""
+        if (
+            self.shortcuts
+            and full == self.fault_active(FB_STACK_FULL)
+            and self._mode.state is ModuleState.OPERATIONAL
+        ):
             return
         self.set_fault(FB_STACK_FULL, full)
 
@@ -470,8 +475,10 @@ class Dem24(IntelligentModule):
         (IWxy,6/7) and, when ``logged``, the stack count (IWxy,5) and with it the stack
         bits of Ixy,0..7, as a read does; IWxy,2 depends on nothing they change
         (configuration, global stop, time base, supply fault), and every change of
-        those refreshes all the words."""
-        if self._mode.state is ModuleState.OFF:
+        those refreshes all the words.  Operational only: during the self-test the
+        words read 0 until it ends (a read of messages then writes them all)."""
+        if self._mode.state is not ModuleState.OPERATIONAL:
+            self._refresh_words()
             return
         iw = self._iw
         # self.image(), inlined
