@@ -118,6 +118,7 @@ _step = st.one_of(
     st.tuples(st.just("time"), st.just(0)),
     st.tuples(st.just("power"), st.sampled_from([0.005, 0.3])),
     st.tuples(st.just("flood"), st.integers(150, 260)),
+    st.tuples(st.just("hardware"), st.tuples(st.sampled_from([17, 16, 32]), st.booleans())),
 )
 
 
@@ -167,6 +168,8 @@ def _apply(plc: Plc, mod: Dem24, kind: str, arg: Any) -> None:
         send_time(plc, JULY_15_1994)
     elif kind == "power":
         plc.power_break(arg)
+    elif kind == "hardware":  # a fault set from outside: supply, terminal block, sync
+        mod.hardware_fault(arg[0], arg[1])
     elif kind == "flood":  # no oscillation detection, FILT 0: the stack fills up
         configure(plc, [0, 0, 1, 1, 1, 1, PERIOD_S, 500, 1])
         for k in range(arg):
@@ -179,6 +182,7 @@ def _apply(plc: Plc, mod: Dem24, kind: str, arg: Any) -> None:
 @given(st.lists(_step, min_size=1, max_size=20))
 @example([("random", (5, 1, 6_000)), ("supply", False), ("advance", 300_000), ("supply", True)])
 @example([("power", 0.3), ("read", 5), ("faults", 0), ("long", 3), ("read", 1)])  # self-test
+@example([("random", (1, 3, 6_000)), ("hardware", (17, True)), ("fine", 20), ("read", 2)])
 @example([("config", (15, 10, 1, 2, 1, 2)), ("random", (7, 2, 6_000)), ("supply", False)])
 @example([("flood", 250), ("read", 9), ("fine", 3), ("read_txt", 0), ("flood", 150)])
 @example([("random", (2, 5, 2_000)), ("long", 2), ("flood", 220), ("read", 30), ("long", 3)])

@@ -114,6 +114,7 @@ class Dem24(IntelligentModule):
         self.pulse_source: PulseSource | None = None
         self.plant_startup: list[Any] = []  # requests the plant file applies after self-test
         self.edges_stamped = 0
+        self._words_fresh = False  # written by _refresh_words since the last supply fault
 
     # --- the parts, for inspection ----------------------------------------------------
 
@@ -233,6 +234,11 @@ class Dem24(IntelligentModule):
         if get_bit(new, OW1_OVERALL) and not get_bit(old, OW1_OVERALL):
             self.log_overall(now)  # DEM 4.2-3 rising edge: log the overall state
         self._refresh_words()
+
+    def set_fault(self, bit: int, active: bool, category: FaultCategory | None = None) -> None:
+        super().set_fault(bit, active, category)
+        if bit == FB_SUPPLY:  # IWxy,2,8: not written before the next _refresh_words
+            self._words_fresh = False
 
     def fault_category_of(self, bit: int) -> FaultCategory:
         if bit < 16:
@@ -476,8 +482,10 @@ class Dem24(IntelligentModule):
         bits of Ixy,0..7, as a read does; IWxy,2 depends on nothing they change
         (configuration, global stop, time base, supply fault), and every change of
         those refreshes all the words.  Operational only: during the self-test the
-        words read 0 until it ends (a read of messages then writes them all)."""
-        if self._mode.state is not ModuleState.OPERATIONAL:
+        words read 0 until it ends (a read of messages then writes them all); and not
+        after a supply fault set from outside (``set_fault``, ``hardware_fault``), which
+        IWxy,2 shows from the next refresh of every word."""
+        if self._mode.state is not ModuleState.OPERATIONAL or not self._words_fresh:
             self._refresh_words()
             return
         iw = self._iw
@@ -506,6 +514,7 @@ class Dem24(IntelligentModule):
     def _refresh_words(self) -> None:
         if self._mode.state is ModuleState.OFF:
             return
+        self._words_fresh = True
         logbook = self.logbook
         timebase, stack = logbook.timebase, logbook.stack
         ready, count = timebase.ready, len(stack)
