@@ -224,8 +224,6 @@ class Dem24(IntelligentModule):
 
     def on_power_off(self, now: int) -> None:
         self.inputs.stop()
-        if self.oscillation is not None:
-            self.oscillation.stop()  # scheduled on the clock, not through call_at
 
     def on_outputs(self, old_ow: list[int], old_o: int, now: int) -> None:
         old, new = old_ow[1], self.ow[1]
@@ -266,10 +264,8 @@ class Dem24(IntelligentModule):
             th = OscThresholds.from_config(
                 config.t_max_s, config.n_max, config.t_min_s, config.n_min
             )
-            # its checks on the clock itself (one per edge of an oscillating input, not
-            # worth the bookkeeping of call_at): on_power_off cancels them
             self.oscillation = Monitor(
-                th, CHANNELS, self.clock.schedule, self._normal_again, inline=self.shortcuts
+                th, CHANNELS, self.call_at, self._normal_again, inline=self.shortcuts
             )
         monitored = config.supply_monitoring and not self.supply
         if monitored != self.fault_active(FB_SUPPLY):
