@@ -23,6 +23,7 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from fieldtwin.clock import MS, S
+from fieldtwin.errors import ConfigError
 from fieldtwin.signals import Edges, RandomEdges
 from fieldtwin.tsx.dem24 import Dem24
 from fieldtwin.tsx.dem24.config import FILT_VALUES
@@ -178,11 +179,28 @@ def _apply(plc: Plc, mod: Dem24, kind: str, arg: Any) -> None:
             plc.clock.run_until(plc.now + MS)
 
 
+def _outcome(plc: Plc, mod: Dem24, kind: str, arg: Any) -> str | None:
+    """None, or the error the step ended in (the same in both: then the history ends).
+
+    On main too, an input declared oscillating with fewer than N-MIN transitions
+    counted (N-MIN > N-MAX + 1) arms its check at the edge + 1 us, already past:
+    ConfigError from call_at.  Not this issue's to change."""
+    try:
+        if kind == "fine":  # a millisecond at a time
+            plc.clock.run_until(plc.now + MS)
+        else:
+            _apply(plc, mod, kind, arg)
+    except ConfigError as error:
+        return repr(error)
+    return None
+
+
 @settings(max_examples=80, deadline=None)
 @given(st.lists(_step, min_size=1, max_size=20))
 @example([("random", (5, 1, 6_000)), ("supply", False), ("advance", 300_000), ("supply", True)])
 @example([("power", 0.3), ("read", 5), ("faults", 0), ("long", 3), ("read", 1)])  # self-test
 @example([("random", (1, 3, 6_000)), ("hardware", (17, True)), ("fine", 20), ("read", 2)])
+@example([("config", (2, 0, 1, 2, 2, 8)), ("random", (4, 0, 2_000)), ("long", 1)])  # the error
 @example([("config", (15, 10, 1, 2, 1, 2)), ("random", (7, 2, 6_000)), ("supply", False)])
 @example([("flood", 250), ("read", 9), ("fine", 3), ("read_txt", 0), ("flood", 150)])
 @example([("random", (2, 5, 2_000)), ("long", 2), ("flood", 220), ("read", 30), ("long", 3)])
@@ -190,19 +208,14 @@ def test_the_edge_shortcuts_change_nothing(steps: list[tuple[str, Any]]) -> None
     fast, ref = _setup(True), _setup(False)
     assert ref[1].inputs.stepped is False and InputBank.stepped is True
     assert _face(*fast) == _face(*ref)
+    steps = [*steps, ("long", 3)]  # past every filter and oscillation check of the history
     for kind, arg in steps:
-        if kind == "fine":  # a millisecond at a time: every image in between
-            for _ in range(arg):
-                for plc, _mod in (fast, ref):
-                    plc.clock.run_until(plc.now + MS)
-                assert _face(*fast) == _face(*ref), (kind, arg)
-            continue
-        for plc, mod in (fast, ref):
-            _apply(plc, mod, kind, arg)
-        assert _face(*fast) == _face(*ref), (kind, arg)
-    for plc, _mod in (fast, ref):
-        plc.advance(2.5)  # past every filter and oscillation check of the history
-    assert _face(*fast) == _face(*ref)
+        for _ in range(arg if kind == "fine" else 1):  # fine: every image in between
+            error = _outcome(*fast, kind, arg)
+            assert error == _outcome(*ref, kind, arg), (kind, arg)
+            assert _face(*fast) == _face(*ref), (kind, arg)
+            if error is not None:
+                return
 
 
 def test_the_shortcuts_are_taken() -> None:
