@@ -12,7 +12,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from fieldtwin.errors import ConfigError
-from fieldtwin.signals.base import check_fraction, check_period, uniform
+from fieldtwin.signals.base import UniformStream, check_fraction, check_period
 
 
 @dataclass(frozen=True, slots=True)
@@ -112,6 +112,15 @@ class Edges:
         index = bisect_right(self.times_us, t)
         return self.times_us[index] if index < len(self.times_us) else None
 
+    def value_and_next(self, t: int) -> tuple[bool, int | None]:
+        """``(value_at(t), next_change(t))`` with one search of the times."""
+        times = self.times_us
+        index = bisect_right(times, t)
+        return bool(self.initial) ^ (index % 2 == 1), times[index] if index < len(times) else None
+
+
+REACH_AHEAD = 15  # edges drawn ahead of the one a search needs (a cache: same values)
+
 
 @dataclass(frozen=True, slots=True)
 class RandomEdges:
@@ -127,6 +136,7 @@ class RandomEdges:
     min_interval_us: int = 1_000
     initial: bool = False
     _edges: list[int] = field(default_factory=list, init=False, repr=False, compare=False)
+    _uniform: UniformStream = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         check_period("min interval", self.min_interval_us)
@@ -136,19 +146,30 @@ class RandomEdges:
                 f"mean interval {self.mean_interval_us} us is below the minimum interval"
                 f" {self.min_interval_us} us (allowed mean >= min)"
             )
+        object.__setattr__(self, "_uniform", UniformStream(self.seed, "edges"))
 
     def _interval(self, index: int) -> int:
         spread = self.mean_interval_us - self.min_interval_us
-        draw = -math.log(uniform(self.seed, "edges", index)) * spread
+        draw = -math.log(self._uniform(index)) * spread
         return self.min_interval_us + round(draw)
 
     def _reach(self, t: int) -> None:
         """Extend the edge list past ``t``."""
         edges = self._edges
         last = edges[-1] if edges else 0
-        while not edges or last <= t:
-            last += self._interval(len(edges))
-            edges.append(last)
+        if edges and last > t:
+            return
+        # _interval inlined: the same draws, the same arithmetic
+        minimum, spread = self.min_interval_us, self.mean_interval_us - self.min_interval_us
+        draw, log, append = self._uniform, math.log, edges.append
+        index = len(edges)
+        while not index or last <= t:
+            last += minimum + round(-log(draw(index)) * spread)
+            append(last)
+            index += 1
+        for ahead in range(index, index + REACH_AHEAD):  # a few more: fewer calls
+            last += minimum + round(-log(draw(ahead)) * spread)
+            append(last)
 
     def value_at(self, t: int) -> bool:
         self._reach(t)
@@ -157,3 +178,11 @@ class RandomEdges:
     def next_change(self, t: int) -> int | None:
         self._reach(t)
         return self._edges[bisect_right(self._edges, t)]
+
+    def value_and_next(self, t: int) -> tuple[bool, int | None]:
+        """``(value_at(t), next_change(t))`` with one search of the edges."""
+        edges = self._edges
+        if not edges or edges[-1] <= t:
+            self._reach(t)
+        index = bisect_right(edges, t)
+        return bool(self.initial) ^ (index % 2 == 1), edges[index]

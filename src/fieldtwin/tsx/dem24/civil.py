@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from functools import lru_cache
 
 from fieldtwin.errors import ConfigError
 
@@ -40,6 +41,7 @@ def days_from_civil(year: int, month: int, day: int) -> int:
     return era * 146097 + doe - 719468
 
 
+@lru_cache(maxsize=64)  # a pure function, asked at every message for the same few days
 def civil_from_days(days: int) -> tuple[int, int, int]:
     """Days since 1970-01-01 -> (year, month, day)."""
     z = days + 719468

@@ -14,10 +14,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 
 from fieldtwin.clock import MS, Handle, SimClock
 from fieldtwin.errors import ConfigError
 from fieldtwin.signals import AnalogSignal, DiscreteSignal
+from fieldtwin.signals.base import SteppedSignal
 from fieldtwin.tsx.dem24.crossing import next_event
 
 CHANNELS = 24
@@ -53,9 +55,22 @@ def check_channel(channel: int) -> int:
 
 
 class _Channel:
-    __slots__ = ("edge_t", "level", "pending", "raw", "signal", "signal_handle", "stamp")
+    __slots__ = (
+        "confirm",
+        "edge_t",
+        "follow",
+        "level",
+        "pending",
+        "raw",
+        "signal",
+        "signal_handle",
+        "stamp",
+        "step",
+    )
 
-    def __init__(self) -> None:
+    def __init__(self, follow: Callback, confirm: Callback) -> None:
+        self.follow = follow  # the clock callbacks of this channel, made once
+        self.confirm = confirm
         self.raw = False  # at the terminals
         self.level = False  # after the filters
         self.pending: Handle | None = None
@@ -63,13 +78,22 @@ class _Channel:
         self.stamp: int | None = None
         self.signal: InputSignal | None = None
         self.signal_handle: Handle | None = None
+        self.step: Callable[[int], tuple[bool, int | None]] | None = None
 
 
+Callback = Callable[[int], None]
 Accept = Callable[[int, bool, int, int | None, int], None]  # channel, level, edge, stamp, now
 
 
 class InputBank:
-    """Raw levels, filters and accepted levels of the 24 channels."""
+    """Raw levels, filters and accepted levels of the 24 channels.
+
+    ``stepped``: a discrete signal that answers its value and next change in one call
+    (:class:`~fieldtwin.signals.base.SteppedSignal`) is asked once per edge; False
+    (the reference of the tests) asks ``value_at`` and ``next_change`` as before.
+    """
+
+    stepped = True
 
     def __init__(
         self,
@@ -79,14 +103,19 @@ class InputBank:
         accept: Accept,
     ) -> None:
         self.clock = clock
+        self._schedule = clock.schedule
         self.thresholds = thresholds
         self._stamp = stamp
         self._accept = accept
-        self._ch = [_Channel() for _ in range(CHANNELS)]
+        self._ch = [
+            _Channel(self._follower(channel), self._confirmer(channel))
+            for channel in range(CHANNELS)
+        ]
         self.active = False  # module operational and inputs readable
         self.filter_us = HARDWARE_FILTER_US
         self.supply_ok = True  # without field supply every input reads 0
-        self._levels = 0  # the accepted levels, bit i = channel i (IWxy,6/7)
+        # the accepted levels, bit i = channel i (IWxy,6/7); read it, never write it
+        self.level_bits = 0
 
     def set_filter_ms(self, filt_ms: int) -> None:
         self.filter_us = max(HARDWARE_FILTER_US, filt_ms * MS)
@@ -98,7 +127,7 @@ class InputBank:
         return self._ch[channel].level
 
     def levels(self) -> int:
-        return self._levels
+        return self.level_bits
 
     # --- the terminals ------------------------------------------------------------
 
@@ -124,11 +153,36 @@ class InputBank:
             ch.signal_handle.cancel()
             ch.signal_handle = None
         ch.signal = signal
+        ch.step = (
+            signal.value_and_next if self.stepped and isinstance(signal, SteppedSignal) else None
+        )
         if signal is not None:
             self._follow(channel, self.clock.now)
 
+    def _follower(self, channel: int) -> Callback:
+        return partial(self._follow, channel)  # now -> self._follow(channel, now)
+
+    def _confirmer(self, channel: int) -> Callback:
+        return partial(self._confirm, channel)
+
     def _follow(self, channel: int, t: int) -> None:
         ch = self._ch[channel]
+        step = ch.step
+        if step is not None:  # set_raw, with the next change found by the same search
+            level, nxt = step(t)
+            schedule = self._schedule
+            if ch.raw != level:
+                ch.raw = level
+                # self._edge(channel, t), inlined
+                pending = ch.pending
+                if pending is not None:
+                    pending.cancel()  # a pulse shorter than the filter is rejected
+                    ch.pending = None
+                if self.active and (level and self.supply_ok) != ch.level:
+                    ch.edge_t, ch.stamp = t, self._stamp(t)  # stamped at the edge
+                    ch.pending = schedule(t + self.filter_us, ch.confirm)
+            ch.signal_handle = None if nxt is None else schedule(nxt, ch.follow)
+            return
         assert ch.signal is not None
         value = ch.signal.value_at(t)
         self.set_value(channel, value, t)
@@ -136,11 +190,7 @@ class InputBank:
             nxt = ch.signal.next_change(t)
         else:  # volts: judged at the instant they cross a type 1 limit (7.2)
             nxt = next_event(ch.signal, t, ch.raw, self.thresholds)  # type: ignore[arg-type]
-        ch.signal_handle = (
-            None
-            if nxt is None
-            else self.clock.schedule(nxt, lambda now: self._follow(channel, now))
-        )
+        ch.signal_handle = None if nxt is None else self._schedule(nxt, ch.follow)
 
     # --- the filters ----------------------------------------------------------------
 
@@ -149,21 +199,22 @@ class InputBank:
 
     def _edge(self, channel: int, t: int) -> None:
         ch = self._ch[channel]
-        if ch.pending is not None:
-            ch.pending.cancel()  # a pulse shorter than the filter is rejected
+        pending = ch.pending
+        if pending is not None:
+            pending.cancel()  # a pulse shorter than the filter is rejected
             ch.pending = None
-        if not self.active or self._effective(ch) == ch.level:
+        # _effective(ch) inlined
+        if not self.active or (ch.raw and self.supply_ok) == ch.level:
             return
         ch.edge_t, ch.stamp = t, self._stamp(t)  # stamped at the edge (manual-notes)
-        ch.pending = self.clock.schedule(
-            t + self.filter_us, lambda now: self._confirm(channel, now)
-        )
+        ch.pending = self.clock.schedule(t + self.filter_us, ch.confirm)
 
     def _confirm(self, channel: int, now: int) -> None:
         ch = self._ch[channel]
         ch.pending = None
-        ch.level = level = self._effective(ch)
-        self._levels = self._levels | (1 << channel) if level else self._levels & ~(1 << channel)
+        ch.level = level = ch.raw and self.supply_ok  # _effective(ch)
+        bits = self.level_bits
+        self.level_bits = bits | (1 << channel) if level else bits & ~(1 << channel)
         self._accept(channel, ch.level, ch.edge_t, ch.stamp, now)
 
     def supply(self, ok: bool, t: int) -> None:
@@ -180,7 +231,7 @@ class InputBank:
             value = self._effective(ch)
             if value != ch.level:
                 ch.level = value
-                self._levels ^= 1 << channel
+                self.level_bits ^= 1 << channel
                 if not silent:
                     self._accept(channel, value, now, self._stamp(now), now)
 
@@ -195,4 +246,4 @@ class InputBank:
     def reset_levels(self) -> None:
         for ch in self._ch:
             ch.level = False
-        self._levels = 0
+        self.level_bits = 0

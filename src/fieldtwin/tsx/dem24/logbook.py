@@ -18,7 +18,7 @@ from collections.abc import Callable
 from fieldtwin.clock import Handle
 from fieldtwin.tsx.dem24.civil import CivilTime
 from fieldtwin.tsx.dem24.stack import Body, Message, MessageStack, MessageType
-from fieldtwin.tsx.dem24.timebase import SyncOutcome, Timebase, TimeReference
+from fieldtwin.tsx.dem24.timebase import SyncOutcome, Timebase, TimeReference, TimeState
 
 MINUTE_MS = 60_000
 
@@ -76,7 +76,11 @@ class Logbook:
 
     def stamp(self, t: int) -> int | None:
         """Module time in ms at ``t``; None while the time is not set (nothing is logged)."""
-        return self.timebase.clock.ms(t) if self.timebase.ready else None
+        timebase = self.timebase
+        state = timebase.machine.state  # timebase.ready, inlined (once per edge)
+        if state is TimeState.SET or state is TimeState.SET_RECEIVED:
+            return timebase.clock.ms(t)
+        return None
 
     def push(self, message_type: MessageType, stamp: int, body: Body) -> bool:
         """Store a message stamped ``stamp`` ms; True when the stack is now full."""

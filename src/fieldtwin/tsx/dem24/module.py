@@ -79,6 +79,13 @@ class Dem24(IntelligentModule):
     fault_string_bytes = 12  # DEM 4.3: 96 bits
     terminal_block_fault_bit = FB_TERMINAL
     plc_limit = ("time-stamping modules", 32)  # DEM 6.2-2 note: 32 in one PLC configuration
+    # The shortcuts of the per-edge and per-message path: after an accepted edge only
+    # what an edge changes is written (_refresh_edge), the stack-full fault is set
+    # only when it changes (_stack_fault), an oscillating input's check is armed
+    # inline (Monitor.inline).  False (the reference of the tests, issue 15): every
+    # word and bit recomputed (_refresh_words), set_fault at every message,
+    # Detector.transition and Monitor._arm at every edge.
+    shortcuts = True
 
     def __init__(
         self,
@@ -107,6 +114,7 @@ class Dem24(IntelligentModule):
         self.pulse_source: PulseSource | None = None
         self.plant_startup: list[Any] = []  # requests the plant file applies after self-test
         self.edges_stamped = 0
+        self._words_fresh = False  # written by _refresh_words since the last supply fault
 
     # --- the parts, for inspection ----------------------------------------------------
 
@@ -225,6 +233,11 @@ class Dem24(IntelligentModule):
             self.log_overall(now)  # DEM 4.2-3 rising edge: log the overall state
         self._refresh_words()
 
+    def set_fault(self, bit: int, active: bool, category: FaultCategory | None = None) -> None:
+        super().set_fault(bit, active, category)
+        if bit == FB_SUPPLY:  # IWxy,2,8: not written before the next _refresh_words
+            self._words_fresh = False
+
     def fault_category_of(self, bit: int) -> FaultCategory:
         if bit < 16:
             return FaultCategory.BLOCKING
@@ -251,7 +264,9 @@ class Dem24(IntelligentModule):
             th = OscThresholds.from_config(
                 config.t_max_s, config.n_max, config.t_min_s, config.n_min
             )
-            self.oscillation = Monitor(th, CHANNELS, self.call_at, self._normal_again)
+            self.oscillation = Monitor(
+                th, CHANNELS, self.call_at, self._normal_again, inline=self.shortcuts
+            )
         monitored = config.supply_monitoring and not self.supply
         if monitored != self.fault_active(FB_SUPPLY):
             self._fault_input(FB_SUPPLY, CH_SUPPLY, monitored)
@@ -341,11 +356,18 @@ class Dem24(IntelligentModule):
     def _accepted(self, channel: int, level: bool, edge: int, stamp: int | None, now: int) -> None:
         self.edges_stamped += 1
         state = int(level)
-        if self.oscillation is not None:
-            state = self.oscillation.judge(channel, edge, state)  # DEM 2.3-3
-        if state >= 0:
+        oscillation = self.oscillation
+        if oscillation is not None:
+            state = oscillation.judge(channel, edge, state)  # DEM 2.3-3
+        if not self.shortcuts:
+            if state >= 0:
+                self._log_change(channel, state, stamp)
+            self._refresh_words()
+        elif state >= 0:
             self._log_change(channel, state, stamp)
-        self._refresh_words()
+            self._refresh_edge(True)
+        else:
+            self._refresh_edge(False)  # nothing logged: the stack count is as it was
 
     def _normal_again(self, channel: int, now: int) -> None:
         """An oscillating input is normal again: its state (AMB-DEM-11)."""
@@ -393,7 +415,22 @@ class Dem24(IntelligentModule):
     def _log(self, message_type: MessageType, stamp: int | None, body: Body) -> None:
         if stamp is None or not self.logging or self.state is not ModuleState.OPERATIONAL:
             return
-        self.set_fault(FB_STACK_FULL, self.logbook.push(message_type, stamp, body))
+        self._stack_fault(self.logbook.push(message_type, stamp, body))
+
+    def _stack_fault(self, full: bool) -> None:
+        """``set_fault(FB_STACK_FULL, full)`` (DEM 4.3), at every message logged or read.
+
+        With ``shortcuts``, skipped while operational and the fault already is
+        ``full``: the latch then stays as it is and IWxy,0, refreshed after every change
+        of what it shows, reads the same (set_fault would recompute it, and mark the
+        bus face changed)."""
+        if (
+            self.shortcuts
+            and full == self.fault_active(FB_STACK_FULL)
+            and self._mode.state is ModuleState.OPERATIONAL
+        ):
+            return
+        self.set_fault(FB_STACK_FULL, full)
 
     def _log_change(self, channel: int, state: int, stamp: int | None) -> None:
         if channel < CHANNELS and not (self.selected() >> channel) & 1:
@@ -415,8 +452,11 @@ class Dem24(IntelligentModule):
     def read_messages(self, count: int) -> list[Message]:
         """Remove and return up to ``count`` messages, oldest first (DEM 4.2-3)."""
         messages = self.logbook.read(count)
-        self.set_fault(FB_STACK_FULL, self.stack.full)
-        self._refresh_words()
+        self._stack_fault(self.stack.full)
+        if self.shortcuts:
+            self._refresh_edge(True)  # a read changes the stack count only
+        else:
+            self._refresh_words()
         return messages
 
     # --- words and bits ------------------------------------------------------------
@@ -431,9 +471,46 @@ class Dem24(IntelligentModule):
         """Inputs read: terminal block fitted, monitored supply present (DEM 2.5-6)."""
         return self.terminal_block and (self.supply or not self.config.supply_monitoring)
 
+    def _refresh_edge(self, logged: bool) -> None:
+        """``_refresh_words`` after an accepted edge or a read of messages: what they can
+        change, written as ``_refresh_words`` writes it.  An edge changes the levels
+        (IWxy,6/7) and, when ``logged``, the stack count (IWxy,5) and with it the stack
+        bits of Ixy,0..7, as a read does; IWxy,2 depends on nothing they change
+        (configuration, global stop, time base, supply fault), and every change of
+        those refreshes all the words.  Operational only: during the self-test the
+        words read 0 until it ends (a read of messages then writes them all); and not
+        after a supply fault set from outside (``set_fault``, ``hardware_fault``), which
+        IWxy,2 shows from the next refresh of every word."""
+        if self._mode.state is not ModuleState.OPERATIONAL or not self._words_fresh:
+            self._refresh_words()
+            return
+        iw = self._iw
+        # self.image(), inlined
+        config = self.config
+        readable = self.terminal_block and (self.supply or not config.supply_monitoring)
+        image = self.inputs.level_bits if readable or config.maintain else 0
+        low, high = image & 0xFFFF, image >> 16
+        if not logged:  # the same words as iw[5:8] = count, low, high (count as it was)
+            if iw[6] != low:
+                iw[6] = low
+            if iw[7] != high:
+                iw[7] = high
+            return
+        stack = self.logbook.stack
+        count = len(stack)
+        if iw[5] != count:
+            iw[5:8] = count, low, high
+            timebase = self.logbook.timebase
+            self.i_bits = input_bits(
+                timebase.ready, count, stack.full, timebase.fault, self.pulse_image
+            )
+        elif iw[6] != low or iw[7] != high:
+            iw[5:8] = count, low, high
+
     def _refresh_words(self) -> None:
         if self._mode.state is ModuleState.OFF:
             return
+        self._words_fresh = True
         logbook = self.logbook
         timebase, stack = logbook.timebase, logbook.stack
         ready, count = timebase.ready, len(stack)

@@ -16,6 +16,7 @@ import enum
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 
 from fieldtwin.clock import Handle, S
 from fieldtwin.fsm import Machine, Table
@@ -120,7 +121,7 @@ class Monitor:
     ``normal(channel, now)`` is called when an input is normal again (AMB-DEM-11).
     """
 
-    __slots__ = ("_handles", "_normal", "_schedule", "detectors")
+    __slots__ = ("_checks", "_handles", "_normal", "_schedule", "detectors", "inline")
 
     def __init__(
         self,
@@ -128,9 +129,15 @@ class Monitor:
         channels: int,
         schedule: Schedule,
         normal: Callable[[int, int], None],
+        *,
+        inline: bool = True,
     ) -> None:
+        # inline: an edge of an oscillating input is counted and its check armed in
+        # judge itself (False, the reference of the tests: transition and _arm)
+        self.inline = inline
         self.detectors = [Detector(thresholds) for _ in range(channels)]
         self._handles: list[Handle | None] = [None] * channels
+        self._checks = [self._checker(channel) for channel in range(channels)]
         self._schedule = schedule
         self._normal = normal
 
@@ -138,12 +145,27 @@ class Monitor:
         """The state to log for a change at ``edge``: ``state``, 2 = oscillating, or -1
         while oscillating (DEM 2.3-3 "its transitions will no longer be indicated")."""
         detector = self.detectors[channel]
-        if detector.transition(edge):
-            state = STATE_OSCILLATING
-        elif detector.machine.state is OscState.OSCILLATING:
-            state = -1
-        self._arm(channel)
-        return state
+        if not self.inline or detector.machine.state is not OscState.OSCILLATING:
+            if detector.transition(edge):
+                state = STATE_OSCILLATING
+            elif detector.machine.state is OscState.OSCILLATING:
+                state = -1
+            self._arm(channel)
+            return state
+        # oscillating: transition(edge) (False), then _arm(channel) with next_check()
+        # inlined, the same handle cancelled and the same check scheduled
+        times = detector._times
+        times.append(edge)
+        handles = self._handles
+        handle = handles[channel]
+        if handle is not None:
+            handle.cancel()
+        th = detector.thresholds
+        n_min = th.n_min
+        at = times[-n_min] + th.t_min_us if len(times) >= n_min else 0
+        declared = detector.declared_at + 1
+        handles[channel] = self._schedule(at if at >= declared else declared, self._checks[channel])
+        return -1
 
     def oscillating(self) -> int:
         """Bit i set while input i is oscillating (DEM 4.2-2 overall-state message)."""
@@ -155,14 +177,16 @@ class Monitor:
                 handle.cancel()
         self._handles = [None] * len(self.detectors)
 
+    def _checker(self, channel: int) -> Callable[[int], None]:
+        return partial(self._check, channel)  # now -> self._check(channel, now)
+
     def _arm(self, channel: int) -> None:
-        handle = self._handles[channel]
+        handles = self._handles
+        handle = handles[channel]
         if handle is not None:
             handle.cancel()
         at = self.detectors[channel].next_check()
-        self._handles[channel] = (
-            None if at is None else self._schedule(at, lambda now: self._check(channel, now))
-        )
+        handles[channel] = None if at is None else self._schedule(at, self._checks[channel])
 
     def _check(self, channel: int, now: int) -> None:
         self._handles[channel] = None
