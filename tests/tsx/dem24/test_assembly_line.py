@@ -83,3 +83,21 @@ def test_5_3_4_macro_step_0_initialisation() -> None:
     plc.write(f"OW{SLOT},1,1", 0)
     plc.advance(0.03)
     assert plc.read(f"IW{SLOT},5") == 0
+
+
+def test_an_n_min_above_the_changes_that_made_it_oscillating_is_normal_again_at_once() -> None:
+    """T-MAX 1 s, N-MAX 2, T-MIN 2 s, N-MIN 8: the 3rd change within 1 s makes input 6
+    oscillating, and with 3 changes in 2 s (fewer than 8) it is normal again at once,
+    at the instant the oscillation is declared (the check used to fall 1 us after the
+    edge, already past at the confirmation: the run stopped on an error)."""
+    config = [0x0014, 0, 1, 2, 2, 8, 60, 500, 60]
+    plc, mod = synced(config=config, select=0xFFFF)
+    for k in range(3):
+        at(plc, 72.0 + 0.1 * k)
+        mod.set_input(6, k % 2 == 0)
+    at(plc, 73.0)  # ran on: no error
+    msgs = [m for m in read_all(plc) if m[7] >> 8 == 6]
+    # 1, 0, then oscillating (2), then at once normal with the present level (1)
+    assert [m[7] & 0xFF for m in msgs] == [1, 0, 2, 1]
+    assert stamp(msgs[2])[4:] == stamp(msgs[3])[4:]  # the same millisecond
+    assert mod.status_details()["oscillating"] == "none"

@@ -12,10 +12,11 @@ Block requests live in :mod:`.requests`, the two models in :mod:`.models`.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any, ClassVar
 
+from fieldtwin.clock import Handle
 from fieldtwin.errors import ConfigError
 from fieldtwin.signals import DiscreteSignal
 from fieldtwin.tsx.dem24 import requests
@@ -265,7 +266,7 @@ class Dem24(IntelligentModule):
                 config.t_max_s, config.n_max, config.t_min_s, config.n_min
             )
             self.oscillation = Monitor(
-                th, CHANNELS, self.call_at, self._normal_again, inline=self.shortcuts
+                th, CHANNELS, self._check_at, self._normal_again, inline=self.shortcuts
             )
         monitored = config.supply_monitoring and not self.supply
         if monitored != self.fault_active(FB_SUPPLY):
@@ -273,6 +274,13 @@ class Dem24(IntelligentModule):
         self.logbook.start_periodic(now)
         self.refresh_status()
         self._refresh_words()
+
+    def _check_at(self, at: int, callback: Callable[[int], None]) -> Handle:
+        """An oscillation check at ``at``, or now if that is past: with N-MIN above the
+        changes that made an input oscillating, it is normal again at once (the check
+        is due 1 us after the edge, the declaration comes at its confirmation)."""
+        now = self.clock.now
+        return self.call_at(at if at >= now else now, callback)
 
     def refuse_config(self, diag_word: int) -> None:
         """DEM 3.4-3: awaiting configuration, diagnostic bits, time-stamping stops."""
