@@ -9,11 +9,13 @@ resynchronised and raises ``ProtocolError`` (the session then closes).
 
 from __future__ import annotations
 
+import struct
 from dataclasses import dataclass
 
 from fieldtwin.errors import ProtocolError
 
 HEADER = 7
+_HEAD = struct.Struct(">HHHB")  # transaction, protocol, length, unit
 MIN_LENGTH = 2  # unit id + function code
 MAX_LENGTH = 254  # unit id + the 253-byte maximum PDU
 MODBUS_PROTOCOL = 0
@@ -36,8 +38,7 @@ def encode_mbap(transaction: int, unit: int, pdu: bytes, protocol: int = MODBUS_
     length = len(pdu) + 1
     if not MIN_LENGTH <= length <= MAX_LENGTH:
         raise ProtocolError(f"MBAP PDU of {len(pdu)} bytes: allowed 1..253")
-    head = transaction.to_bytes(2, "big") + protocol.to_bytes(2, "big")
-    return head + length.to_bytes(2, "big") + bytes((unit,)) + pdu
+    return _HEAD.pack(transaction, protocol, length, unit) + pdu
 
 
 class MbapDecoder:
@@ -54,6 +55,10 @@ class MbapDecoder:
     def feed(self, data: bytes) -> list[MbapFrame]:
         """Add bytes; return every frame they complete, in order."""
         buf = self._buf
+        if not buf and len(data) >= HEADER:  # the usual case: exactly one whole frame
+            transaction, protocol, length, unit = _HEAD.unpack_from(data)
+            if len(data) == HEADER - 1 + length and MIN_LENGTH <= length <= MAX_LENGTH:
+                return [MbapFrame(transaction, unit, bytes(data[HEADER:]), protocol)]
         buf += data
         frames: list[MbapFrame] = []
         while len(buf) >= HEADER:

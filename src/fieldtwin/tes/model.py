@@ -234,12 +234,12 @@ class Tes:
 
     def answer_delay(self, link: Link) -> int:
         """Microseconds: the port's answer delay (§3.1.3) plus a ``late_answer`` fault."""
-        value = self.ram.params[f"{state.link_key(link)}.answer_delay_ms"]
+        value = self.ram.params[_DELAY_KEYS[link]]
         assert isinstance(value, int)
         return value * MS + self.line_faults.late_us
 
     def count(self, link: Link, counter: Counter, now: int) -> None:
-        self.ram.counters[state.link_key(link)].bump(counter)
+        self.ram.counters[_LINK_KEYS[link]].bump(counter)
 
     def share_line_counts(self, link: Link, tally: LineTally) -> None:
         """The RTU line counts its line-wide counters (§6.2.3.2 01Ah-01Dh) once per frame
@@ -468,3 +468,7 @@ class Tes:
                 f"line fault {fault!r} not allowed (allowed: bad_crc, broken_character)"
             ) from None
         self.line_faults.queue(kind, count, link)
+
+
+_LINK_KEYS = {link: state.link_key(link) for link in Link}  # once, not per request
+_DELAY_KEYS = {link: f"{key}.answer_delay_ms" for link, key in _LINK_KEYS.items()}

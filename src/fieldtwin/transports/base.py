@@ -109,8 +109,20 @@ class FdTransport:
     def send(self, data: bytes) -> None:
         """Queue ``data`` and write as much as the kernel takes now."""
         self._check_open("send")
-        self._out += data
-        self.flush()
+        if not self._out and len(data) <= READ_CHUNK:
+            # nothing queued (the usual case): write at once, queue what is left
+            try:
+                written = self._write(data)
+            except BlockingIOError:
+                written = 0
+            except OSError as exc:
+                self._broken(f"write failed: {exc}")
+            if written >= len(data):
+                return
+            self._out += data[max(written, 0) :]
+        else:
+            self._out += data
+            self.flush()
         if self._out and self.watcher is not None:
             self.watcher.backlogged(self)
 
