@@ -10,6 +10,7 @@ and every writable kind a writer, in two tables checked complete at import.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Mapping, Sequence
 
 from fieldtwin.errors import ProtocolError
@@ -60,20 +61,21 @@ class RegisterFile:
         """Master reads of consecutive words, in order: ``get`` of each, the 32-bit value
         of a pair computed once for its two words (value32 has no side effect)."""
         out: list[int] = []
-        last: tuple[Kind, int] | None = None
+        last: tuple[str, int] | None = None
         value = 0
         inputs = self.model.digital_inputs
+        pairs = _pair_slots(self.model)  # by address: (kind's name, input, low word) or None
         for reg in regs:
-            kind = reg.kind
-            if kind not in PAIRS:
+            slot = pairs[reg.address]
+            if slot is None:
                 out.append(self.get(reg, now))
                 continue
-            i, low = divmod(reg.index, 2)
+            name, i, low = slot
             if i >= inputs:
                 out.append(0)  # AMB-TES-13: inputs the model does not have read 0
                 continue
-            if last != (kind, i):
-                last, value = (kind, i), self.di.value32(_PAIR_NAMES[kind], i, now)
+            if last != (name, i):
+                last, value = (name, i), self.di.value32(name, i, now)
             out.append((value if low else value >> 16) & 0xFFFF)
         return tuple(out)
 
@@ -188,6 +190,23 @@ def _splice(mask: int, word: int, value: int) -> int:
 
 Reader = Callable[[RegisterFile, Register, int], int]
 _PAIR_NAMES = {kind: kind.value for kind in PAIRS}  # an Enum's .value is a slow property
+
+
+@functools.cache
+def _pair_slots(model: TesModel) -> dict[int, tuple[str, int, bool] | None]:
+    """Each word of ``model``'s map by address: the 32-bit pair it is half of, as
+    (kind's name, input, low word), or None (a read's words found by int, not by an
+    Enum's hash, which Python computes in Python)."""
+    slots: dict[int, tuple[str, int, bool] | None] = {}
+    for address, reg in register_table(model).items():
+        if reg.kind in PAIRS:
+            i, low = divmod(reg.index, 2)
+            slots[address] = (_PAIR_NAMES[reg.kind], i, bool(low))
+        else:
+            slots[address] = None
+    return slots
+
+
 Writer = Callable[[RegisterFile, Register, int, int], None]
 
 

@@ -36,6 +36,8 @@ COUNTER_ORDER = (
     Counter.NO_SILENCE,
 )
 _COUNTER_INDEX = {counter: i for i, counter in enumerate(COUNTER_ORDER)}
+# the same by the member's id: an Enum's hash is computed in Python (a bump per request)
+_COUNTER_SLOT = {id(counter): i for counter, i in _COUNTER_INDEX.items()}
 
 
 def link_key(link: Link) -> str:
@@ -93,7 +95,7 @@ class LinkCounters:
             counter = Counter.NOT_READY_REPLIES
         if counter in (Counter.EXCEPTION_REPLIES, Counter.NOT_READY_REPLIES):
             self.not_ready_owed = False
-        i = _COUNTER_INDEX[counter]
+        i = _COUNTER_SLOT[id(counter)]  # members live as long as the process: ids are fixed
         self.values[i] = (self.values[i] + 1) & 0xFFFF
 
 
