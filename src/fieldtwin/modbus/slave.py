@@ -12,6 +12,7 @@ import heapq
 import itertools
 from collections.abc import Iterable
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 from fieldtwin.errors import ConfigError
 from fieldtwin.modbus.model import (
@@ -40,16 +41,14 @@ LAST_SLAVE = 247
 NOT_READY = ExceptionCode.SLAVE_DEVICE_FAILURE
 
 
-@dataclass(frozen=True, slots=True)
-class Transmission:
-    """Bytes to send at simulated time ``at``."""
+class Transmission(NamedTuple):
+    """Bytes to send at simulated time ``at`` (a named tuple: one per reply, cheap)."""
 
     at: int
     data: bytes
 
 
-@dataclass(frozen=True, slots=True)
-class Reply:
+class Reply(NamedTuple):
     """A device's reply PDU, due at ``at``."""
 
     device: SlaveDevice
