@@ -501,14 +501,15 @@ class Runner:
         else:
             timeout = min(max(0.0, pace.wall_at(target) - lead - wall.monotonic()), MAX_WAIT_S)
         ready = self._handle(wall.wait(min(timeout, self._wait_cap())))
-        reached = self._clamp(pace.sim_at(wall.monotonic()), end)
+        woke = wall.monotonic()
+        reached = self._clamp(pace.sim_at(woke), end)
         if ready:
             if not self._settle(reached):
                 self._deliver(ready)
         elif target is None:
             self._settle(reached)
         else:
-            if lead and wall.monotonic() + lead >= pace.wall_at(target):
+            if lead and woke + lead >= pace.wall_at(target):
                 reached = max(reached, self._clamp(target, end))
             self._settle(min(target, reached))
 

@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 from typing import Protocol
 
 from fieldtwin.clock import MS, Handle, S, SimClock
+from fieldtwin.signals.base import SteppedSignal
 from fieldtwin.signals.discrete import PulseTrain
 
 TICK = 100 * MS  # §4.1.4 / §6.2.5 chronometers in 1/10 s
@@ -49,13 +50,22 @@ class DiscreteSource(Protocol):
     def next_change(self, t_us: int) -> int | None: ...
 
 
+Step = Callable[[int], tuple[bool, int | None]]  # t -> (value at t, next change after t)
+
+
 @dataclass(slots=True)
 class _Follow:
     """A signal an input follows at read time: the time of its next edge."""
 
-    signal: DiscreteSource
+    step: Step  # the signal's value and next change, one search where it can
     next_edge: int | None
     pulse: PulseTrain | None  # a pulse train: whole periods can be jumped
+
+
+def _stepper(signal: DiscreteSource) -> Step:
+    if isinstance(signal, SteppedSignal):
+        return signal.value_and_next
+    return lambda t: (signal.value_at(t), signal.next_change(t))
 
 
 @dataclass(slots=True)
@@ -132,9 +142,10 @@ class DigitalInputs:
             return
         self.sync()
         inp = self._inputs[i]
-        at = signal.next_change(now)
+        step = _stepper(signal)
+        value, at = step(now)
         pulse = signal if isinstance(signal, PulseTrain) else None
-        inp.follow = _Follow(signal, None if at is None else max(at, now + 1), pulse)
+        inp.follow = _Follow(step, None if at is None else max(at, now + 1), pulse)
         self._followed.append(i)
         if inp.pending is not None:  # confirmed at read time from now on
             at = inp.pending.time
@@ -142,7 +153,7 @@ class DigitalInputs:
             inp.pending = None
             inp.pending_at, inp.pending_value = at, inp.direct
             inp.pending_edge = at - self._delay(inp.direct)
-        inp.contact = bool(signal.value_at(now))
+        inp.contact = bool(value)
         self._update(i, now)
         Beat.of(self._clock).join(self)
 
@@ -200,7 +211,7 @@ class DigitalInputs:
         """The edges and confirmations of input ``i`` up to ``now``, in clock order."""
         fol = inp.follow
         assert fol is not None
-        signal = fol.signal
+        step = fol.step
         while True:
             p, e = inp.pending_at, fol.next_edge
             if p is not None and p <= now and (e is None or p <= e):
@@ -213,9 +224,9 @@ class DigitalInputs:
                 continue
             if e is None or e > now:
                 break
-            at = signal.next_change(e)
+            value, at = step(e)
             fol.next_edge = None if at is None else max(at, e + 1)
-            inp.contact = bool(signal.value_at(e))
+            inp.contact = bool(value)
             self._update(i, e)
             if inp.filtered and inp.since == e and fol.pulse is not None:  # no filter
                 self._jump(inp, fol, fol.pulse, e, e, now)
@@ -275,7 +286,7 @@ class DigitalInputs:
         inp.pending_at = None
         if value == inp.filtered:
             return  # §4.1.1 the new state was not confirmed: nothing happened
-        delay = self._filter_ticks(value) * FILTER_BASE
+        delay = self._delay(value)
         if delay == 0:
             self._confirm(i, value, now)
         elif inp.follow is not None:  # confirmed at read time

@@ -111,12 +111,7 @@ class FdTransport:
         self._check_open("send")
         if not self._out and len(data) <= READ_CHUNK:
             # nothing queued (the usual case): write at once, queue what is left
-            try:
-                written = self._write(data)
-            except BlockingIOError:
-                written = 0
-            except OSError as exc:
-                self._broken(f"write failed: {exc}")
+            written = self._write_some(data)
             if written >= len(data):
                 return
             self._out += data[max(written, 0) :]
@@ -130,15 +125,19 @@ class FdTransport:
         """Write queued bytes until the kernel would block."""
         out = self._out
         while out and not self.closed:
-            try:
-                written = self._write(bytes(out[:READ_CHUNK]))
-            except BlockingIOError:
-                return
-            except OSError as exc:
-                self._broken(f"write failed: {exc}")
+            written = self._write_some(bytes(out[:READ_CHUNK]))
             if written <= 0:
                 return
             del out[:written]
+
+    def _write_some(self, data: bytes) -> int:
+        """``_write``: the bytes the kernel took, 0 when it would block."""
+        try:
+            return self._write(data)
+        except BlockingIOError:
+            return 0
+        except OSError as exc:
+            self._broken(f"write failed: {exc}")
 
     def _broken(self, why: str) -> NoReturn:
         self.close()
