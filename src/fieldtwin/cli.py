@@ -28,7 +28,7 @@ if TYPE_CHECKING:
 
 SUPPRESS_SPEED: object = object()  # --speed not given: the plant's [run] speed decides
 # Issue 20 item 9: the exit status when the reader of the output went away (`| head -1`):
-# 128 + SIGPIPE, what a shell shows for `yes | head -1` (docs/decisions.md, "Broken pipes")
+# 128 + SIGPIPE, what a shell shows for `yes | head -1` (docs/decisions.md, "Connection limit and broken pipes")
 PIPE_CLOSED = 141
 
 
@@ -154,10 +154,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         return PIPE_CLOSED
 
 
-def _pipe_gone(stream: TextIO, only_if_broken: bool = False) -> None:
+def _pipe_gone(stream: TextIO | None, only_if_broken: bool = False) -> None:
     """Point ``stream``'s descriptor at /dev/null: what is still buffered, and whatever
     is printed later, goes nowhere instead of raising (the recipe of Python's signal
     module documentation, "Note on SIGPIPE")."""
+    if stream is None:  # the process started without it (>&-)
+        return
     if only_if_broken:
         try:
             stream.flush()
