@@ -28,7 +28,8 @@ if TYPE_CHECKING:
 
 SUPPRESS_SPEED: object = object()  # --speed not given: the plant's [run] speed decides
 # Issue 20 item 9: the exit status when the reader of the output went away (`| head -1`):
-# 128 + SIGPIPE, what a shell shows for `yes | head -1` (docs/decisions.md, "Connection limit and broken pipes")
+# 128 + SIGPIPE, what a shell shows for `yes | head -1` (docs/decisions.md,
+# "Connection limit and broken pipes")
 PIPE_CLOSED = 141
 
 
