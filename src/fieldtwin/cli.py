@@ -5,11 +5,13 @@ from __future__ import annotations
 import argparse
 import gc
 import math
+import os
 import signal
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager, suppress
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TextIO, cast
 
 from fieldtwin import __version__
 from fieldtwin.clock import S, SimClock
@@ -25,6 +27,10 @@ if TYPE_CHECKING:
     from fieldtwin.runtime.runner import Runner
 
 SUPPRESS_SPEED: object = object()  # --speed not given: the plant's [run] speed decides
+# Issue 20 item 9: the exit status when the reader of the output went away (`| head -1`):
+# 128 + SIGPIPE, what a shell shows for `yes | head -1` (docs/decisions.md,
+# "Connection limit and broken pipes")
+PIPE_CLOSED = 141
 
 
 def _speed(text: str) -> float | None:
@@ -136,6 +142,99 @@ def _control_options(run: argparse.ArgumentParser) -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """The `fieldtwin` command; exit status PIPE_CLOSED, quietly, when its output was lost."""
+    try:
+        try:
+            return _main(argv)
+        finally:
+            if sys.stdout is not None:  # None: started with its stdout closed (>&-)
+                sys.stdout.flush()  # here, not at the interpreter's exit: a broken pipe is seen
+    except BrokenPipeError:
+        _pipe_gone(sys.stdout)
+        _pipe_gone(sys.stderr, only_if_broken=True)
+        return PIPE_CLOSED
+
+
+def _pipe_gone(stream: TextIO | None, only_if_broken: bool = False) -> None:
+    """Point ``stream``'s descriptor at /dev/null: what is still buffered, and whatever
+    is printed later, goes nowhere instead of raising (the recipe of Python's signal
+    module documentation, "Note on SIGPIPE")."""
+    if stream is None:  # the process started without it (>&-)
+        return
+    if only_if_broken:
+        try:
+            stream.flush()
+            return
+        except BrokenPipeError:
+            pass
+        except (OSError, ValueError):
+            return
+    with suppress(OSError, ValueError, AttributeError):  # not a real descriptor (a test's)
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        try:
+            os.dup2(devnull, stream.fileno())
+        finally:
+            os.close(devnull)
+    with suppress(OSError, ValueError):
+        stream.flush()
+
+
+class _Reader:
+    """The standard output or error of `fieldtwin run`: when its reader goes away
+    (``| head -1``, a log pager that quits), printing stops and the plant keeps
+    serving (issue 20 item 9); said once on the other stream."""
+
+    def __init__(self, stream: TextIO, name: str) -> None:
+        self._stream = stream
+        self._name = name
+        self.gone = False
+        self.other: _Reader | None = None
+
+    def write(self, text: str) -> int:
+        if not self.gone:
+            try:
+                return self._stream.write(text)
+            except BrokenPipeError:
+                self._lose()
+        return len(text)
+
+    def flush(self) -> None:
+        if not self.gone:
+            try:
+                self._stream.flush()
+            except BrokenPipeError:
+                self._lose()
+
+    def _lose(self) -> None:
+        self.gone = True
+        _pipe_gone(self._stream)
+        if self.other is not None:
+            self.other.write(
+                f"fieldtwin: the reader of the {self._name} went away; the plant keeps"
+                " running without printing there\n"
+            )
+            self.other.flush()
+
+    def __getattr__(self, name: str) -> object:  # isatty, fileno, encoding ...
+        return getattr(self._stream, name)
+
+
+@contextmanager
+def _readers() -> Iterator[tuple[_Reader, _Reader]]:
+    """sys.stdout and sys.stderr as ``_Reader`` while `run` runs."""
+    saved = sys.stdout, sys.stderr
+    with open(os.devnull, "w") as nowhere:  # for a stream the process started without (>&-)
+        out = _Reader(saved[0] or nowhere, "output")
+        err = _Reader(saved[1] or nowhere, "error output")
+        out.other, err.other = err, out
+        sys.stdout, sys.stderr = cast(TextIO, out), cast(TextIO, err)
+        try:
+            yield out, err
+        finally:
+            sys.stdout, sys.stderr = saved
+
+
+def _main(argv: Sequence[str] | None) -> int:
     words = list(sys.argv[1:] if argv is None else argv)
     if words[:1] == ["tesis"]:  # the workbench parses its own options (--store, --model...)
         from fieldtwin.tes.tesis import main as tesis_main
@@ -148,7 +247,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = _parser().parse_args(words)
     try:
         if args.command == "run":
-            return _run(args)
+            with _readers() as (out, _):
+                status = _run(args)
+            return PIPE_CLOSED if out.gone else status
         if args.command == "trace":
             from fieldtwin.tracecli import run_trace
 

@@ -6,6 +6,11 @@ line on a pty, a serial port or a memory transport) and ``serve_rtu_over_tcp``
 core says when it next needs the clock (``next_deadline``); one clock event per
 core wakes it then, and replies are sent the instant they are due.
 
+A TCP endpoint at its connection limit hangs up its longest-idle connection
+for a new master (fieldtwin.transports.tcp); a pump tells the listener whether
+its connection is in the middle of a request (one that is is never hung up)
+and the server reports the first such eviction once.
+
 ``ModbusServer.tap(bus, endpoint)`` publishes every frame in and out on the
 plant's event bus (fieldtwin.runtime.wiretap); a pump checks ``bus.active``
 first, so an unobserved server pays one attribute read per chunk.
@@ -28,7 +33,7 @@ from fieldtwin.runtime.events import EventBus
 from fieldtwin.runtime.runner import Runner
 from fieldtwin.runtime.wiretap import Stream, Wiretap
 from fieldtwin.transports.base import LineSettings, Listener, Transport
-from fieldtwin.transports.tcp import listener_url
+from fieldtwin.transports.tcp import TcpTransport, listener_url
 
 # Real transports deliver bytes with operating-system jitter and no line timing:
 # a frame complete by length and CRC is taken at once (eager), and inside a
@@ -70,7 +75,13 @@ class _Pump:
         self._stream: Stream | None = None  # the wiretap's decoder, made when first observed
         if server is not None:
             server.pumps[id(self)] = self
+        if isinstance(transport, TcpTransport):  # its listener may hang up an idle one
+            transport.in_progress = self.in_progress
         runner.attach(transport, self.on_data, self.on_close)
+
+    def in_progress(self) -> bool:
+        """A request is in progress: a reply (or a frame's end) is still due."""
+        return self.core.next_deadline() is not None
 
     def _observed(self) -> Stream | None:
         server = self._server
@@ -195,6 +206,22 @@ class ModbusServer:
         self.wiretap: Wiretap | None = None
         self._timing = timing  # the RTU framing a wiretap copies (None: MBAP)
         self._holding = False  # holds the runner's pace (a real RTU line)
+        self._evictions_told = False
+
+    @property
+    def evicted(self) -> int:
+        """Idle connections hung up at the connection limit to let a new master in."""
+        return int(getattr(self._listener, "evicted", 0))
+
+    def connected(self) -> None:
+        """A connection was accepted: say once that the limit is making room."""
+        if not self._evictions_told and self.evicted:
+            self._evictions_told = True
+            limit = getattr(self._listener, "max_connections", "?")
+            self.runner.report(
+                f"{self.where}: {limit} connections open (the limit): each new one takes"
+                " the place of the longest-idle one, which is closed (said once)"
+            )
 
     def tap(self, bus: EventBus, endpoint: str) -> None:
         """Publish every frame in and out on ``bus``, naming ``endpoint`` (as the plant does)."""
@@ -248,6 +275,7 @@ def serve_tcp(
     server = ModbusServer(runner, "modbus-tcp", url_of("tcp", listener), slaves, listener=listener)
 
     def on_connect(transport: Transport, now: int) -> None:
+        server.connected()
         _Pump(runner, transport, TcpSession(slaves), server)
 
     runner.attach_listener(listener, on_connect)
@@ -311,6 +339,7 @@ def serve_rtu_over_tcp(
     )
 
     def on_connect(transport: Transport, now: int) -> None:
+        server.connected()
         line = RtuLine(slaves, link, timing, wiring, wire)
         _Pump(runner, transport, line, server, precise=wire is not None)
 

@@ -62,9 +62,15 @@ def _parser() -> argparse.ArgumentParser:
 READ_ONLY = frozenset({"show", "validate", "map", "export", "iotest"})
 
 
+class _Console(Console):
+    def on_broken_pipe(self) -> None:
+        """The reader went away: `fieldtwin`'s main exits quietly (rich would exit 1)."""
+        raise BrokenPipeError
+
+
 def main(argv: list[str]) -> int:
     args = _parser().parse_args(argv)
-    console = Console(highlight=False, width=120)
+    console = _Console(highlight=False, width=120)
     try:
         if args.command == "models":
             _models(console)

@@ -1,8 +1,11 @@
 """TCP on loopback (by default): a Listener for slaves, ``connect`` for masters.
 
 A listener holds at most ``max_connections`` open connections (default
-DEFAULT_MAX_CONNECTIONS); a failed accept for want of descriptors or buffers
-raises ``AcceptFailed`` so the runner can back off instead of dying.
+DEFAULT_MAX_CONNECTIONS).  At the limit a new connection takes the place of the
+longest-idle one (no request received for the longest time) that its server
+says is not in the middle of a request; when there is none, the new one is
+closed at once.  A failed accept for want of descriptors or buffers raises
+``AcceptFailed`` so the runner can back off instead of dying.
 
 Sockets are non-blocking with Nagle off (a Modbus answer leaves at once).
 ``receive`` on a connection whose peer has closed raises TransportError and
@@ -14,8 +17,11 @@ from __future__ import annotations
 import errno
 import socket
 import struct
+from collections import OrderedDict
 from collections.abc import Callable
 from contextlib import suppress
+from functools import partial
+from itertools import islice
 
 from fieldtwin.errors import ConfigError, TransportError
 from fieldtwin.transports.base import AcceptFailed, FdTransport
@@ -23,6 +29,9 @@ from fieldtwin.transports.base import AcceptFailed, FdTransport
 CONNECT_TIMEOUT_S = 5.0
 # Open connections per listening endpoint (issue 10 item 1); more are closed at once.
 DEFAULT_MAX_CONNECTIONS = 256
+# Issue 20 item 7: at the limit, the longest-idle connections looked at for one that
+# may go (not in the middle of a request); so many at most, whatever the limit.
+EVICT_PROBE = 8
 LISTEN_BACKLOG = 128
 ACCEPT_BATCH = 64  # connections looked at per accept() call, refused ones included
 # Issue 10 item 3, fairness: a read holds at most 2 KiB of requests (170 reads of 12
@@ -54,6 +63,13 @@ def listener_url(scheme: str, address: tuple[str, int] | tuple[str, int, int, in
 class TcpTransport(FdTransport):
     """One TCP connection."""
 
+    # Issue 20 item 7: set by the server that reads an accepted connection; True while
+    # a request is in progress (its answer not yet sent).  None: its server never
+    # said, so its listener never closes it to make room for a new one.
+    in_progress: Callable[[], bool] | None = None
+    # the listener's open connections, least recently active first (None: not accepted)
+    _recency: OrderedDict[int, TcpTransport] | None = None
+
     def __init__(
         self, sock: socket.socket, name: str, on_release: Callable[[], None] | None = None
     ) -> None:
@@ -79,7 +95,17 @@ class TcpTransport(FdTransport):
             self._broken(f"receive failed: {exc}")
         if not data:
             self._broken("the peer has closed the connection")
+        recency = self._recency
+        if recency is not None:  # a request: the most recently active connection now
+            recency.move_to_end(id(self))
         return data
+
+    def hang_up(self) -> None:
+        """Close with a FIN (an orderly end the peer sees as such), not a reset."""
+        if not self.closed:
+            with suppress(OSError):
+                self._sock.shutdown(socket.SHUT_RDWR)
+            self.close()
 
     def fileno(self) -> int | None:
         return None if self.closed else self._fd
@@ -94,8 +120,13 @@ class TcpTransport(FdTransport):
 class TcpListener:
     """A listening socket; ``accept`` is non-blocking.
 
-    At most ``max_connections`` accepted connections are open at once: one
-    more is accepted and closed at once (counted in ``refused``).  An accept
+    At most ``max_connections`` accepted connections are open at once.  One
+    more takes the place of the longest-idle open connection (no request
+    received for the longest time; accepted counts as a request) whose
+    ``in_progress`` says no request is in progress and that has no answer
+    queued: that one is hung up with a FIN (counted in ``evicted``).  Only the
+    ``EVICT_PROBE`` longest-idle connections are looked at; when none of them
+    may go, the new one is closed at once (counted in ``refused``).  An accept
     that fails for want of resources raises ``AcceptFailed``; one that fails
     for the waiting connection's own reasons (it was reset, a network error
     pending on it) is skipped.
@@ -122,6 +153,9 @@ class TcpListener:
         self.max_connections = max_connections
         self.live = 0  # accepted connections still open
         self.refused = 0  # connections closed at once: the limit was reached
+        self.evicted = 0  # idle connections hung up to make room for a new one
+        # open connections by id, least recently active first (O(1) per request)
+        self._open: OrderedDict[int, TcpTransport] = OrderedDict()
         self._sock = sock
         self._fd = sock.fileno()
 
@@ -141,24 +175,38 @@ class TcpListener:
                 if exc.errno in _EXHAUSTED:
                     raise AcceptFailed(f"{self.name}: cannot accept a connection: {exc}") from exc
                 continue  # accept(2): the waiting connection's own error; take the next
-            if self.live >= self.max_connections:
+            if self.live >= self.max_connections and not self._evict_idle():
                 self.refused += 1
                 _close_at_once(conn)
                 continue
             try:
                 conn.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, SERVER_SEND_BUFFER)
-                transport = TcpTransport(
-                    conn, f"{self.name} <- {_hostport(remote)}", self._released
-                )
+                transport = TcpTransport(conn, f"{self.name} <- {_hostport(remote)}")
             except OSError:  # reset before we could set it up: take the next
                 conn.close()
                 continue
+            key = id(transport)
+            transport._on_release = partial(self._released, key)
+            transport._recency = self._open
+            self._open[key] = transport
             self.live += 1
             return transport
         return None  # still readable: the next wait comes back here
 
-    def _released(self) -> None:
+    def _evict_idle(self) -> bool:
+        """Hang up the longest-idle connection that may go; False if none may."""
+        for transport in islice(self._open.values(), EVICT_PROBE):
+            busy = transport.in_progress
+            if busy is None or transport.pending_output or busy():
+                continue
+            transport.hang_up()  # its release takes it out of ``_open``
+            self.evicted += 1
+            return True
+        return False
+
+    def _released(self, key: int) -> None:
         self.live -= 1
+        self._open.pop(key, None)
 
     def fileno(self) -> int:
         return self._fd
