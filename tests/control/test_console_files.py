@@ -10,8 +10,9 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import Any
 
 import httpx
 import pytest
@@ -91,6 +92,25 @@ def test_prog_load_takes_the_program_text(control: Control) -> None:
     assert control.console_line("W20") == {"lines": ["W20 = 30"], "error": None}
     # the text may also follow the line's first newline (how it is recorded)
     assert control.console_line("prog load -\n" + PROGRAM)["error"] is None
+
+
+def test_the_text_is_recorded_with_its_line_and_replays(control: Control) -> None:
+    recorded: list[str] = []
+
+    class Recorder:  # as runtime.record.Recorder.command: records the line, runs it
+        def command(self, kind: str, name: str, args: object, run: Callable[[], Any]) -> Any:
+            assert kind == "line"
+            recorded.append(name)
+            return run()
+
+    plant = control.plant
+    plant.recorder = Recorder()  # type: ignore[assignment]
+    try:
+        answer = control.console_line("prog load -", PROGRAM)
+    finally:
+        plant.recorder = None
+    assert recorded == ["prog load -\n" + PROGRAM]
+    assert control.console.execute(recorded[0]) == answer["lines"]  # what a replay runs
 
 
 def test_a_refused_program_text_names_line_and_column_of_the_text(control: Control) -> None:
