@@ -136,9 +136,10 @@ class Console:
         the line, as ``LINE\nTEXT``."""
         if text is not None:
             if "\n" in line:
+                head = line.partition("\n")[0].strip()
                 raise ConfigError(
-                    f"{line.partition(chr(10))[0].strip()!r}: give the text after the line's"
-                    " first newline or as its text, not both"
+                    f"{head!r}: give the text after the line's first newline or as its"
+                    " text, not both"
                 )
             line = f"{line}\n{text}"
         recorder = self.plant.recorder
