@@ -3,6 +3,12 @@
 Every command returns its output lines; the formats are stable and documented
 in docs/console.md (e.g. ``IW5,0 = H'1008'``).  An error is a ConfigError whose
 message names the token at fault and what is allowed.
+
+The stand-alone console reads the files its user names (``prog load FILE``, a
+``csv`` signal), within fieldtwin.textfile's bounds.  The control API's console
+(``Console(plant, files=False)``: ``POST /console``, ``console --attach``) reads
+none: ``prog load -`` takes the program's text that comes with the line, and a
+command naming a file is refused, naming the verb (docs/control.md).
 """
 
 from __future__ import annotations
@@ -33,6 +39,7 @@ from fieldtwin.devices.tes import TesDevice
 from fieldtwin.errors import ConfigError, FieldtwinError
 from fieldtwin.live import tes_line
 from fieldtwin.plant import Plant
+from fieldtwin.signals.spec import file_in_spec
 from fieldtwin.tsx.addressing import parse_object
 from fieldtwin.tsx.plc import Plc
 from fieldtwin.tsx.txt import ExchangeTimeout
@@ -82,12 +89,15 @@ class Console:
         *,
         interrupted: Callable[[], bool] = lambda: False,
         progress: Callable[[str], None] | None = None,
+        files: bool = True,
     ) -> None:
         """``interrupted`` is asked between the steps of an ``advance`` (the interactive
-        terminal's Ctrl-C); ``progress`` is told when a long one starts."""
+        terminal's Ctrl-C); ``progress`` is told when a long one starts.  ``files``
+        False is the control API's console: no command reads a file."""
         self.plant = plant
         self.interrupted = interrupted
         self.progress = progress
+        self.files = files
         self.trace = ConsoleTrace(plant.events)
         self._commands: dict[str, Callable[[list[str]], list[str]]] = {
             "read": self._read,
@@ -109,8 +119,8 @@ class Console:
             "tes": self._tes,
             "trace": self.trace.command,
             "help": self._help,
-            "prog": prog_command(lambda: self.plc),
         }
+        self._prog = prog_command(lambda: self.plc, files=files)
 
     @property
     def plc(self) -> Plc:
@@ -118,22 +128,45 @@ class Console:
             raise ConfigError("this plant has no PLC (add a [plc] table or [[module]] tables)")
         return self.plant.plc
 
-    def execute(self, line: str) -> list[str]:
-        """Run one command line; returns its output lines (recorded: plant.record)."""
+    def execute(self, line: str, text: str | None = None) -> list[str]:
+        """Run one command line; returns its output lines (recorded: plant.record).
+
+        ``text`` is the text that comes with the line (``prog load -`` takes a
+        program's); it may also follow the line's first newline.  It is recorded with
+        the line, as ``LINE\nTEXT``."""
+        if text is not None:
+            if "\n" in line:
+                head = line.partition("\n")[0].strip()
+                raise ConfigError(
+                    f"{head!r}: give the text after the line's first newline or as its"
+                    " text, not both"
+                )
+            line = f"{line}\n{text}"
         recorder = self.plant.recorder
         if recorder is not None:
             lines: list[str] = recorder.command("line", line, (), lambda: self._execute(line))
             return lines
         return self._execute(line)
 
-    def _execute(self, line: str) -> list[str]:
+    def _execute(self, full: str) -> list[str]:
+        line, newline, attached = full.partition("\n")
+        text = attached if newline and attached.strip() else None
         try:
             words = split_line(line)
         except ValueError as exc:
             raise ConfigError(f"cannot split {line.strip()!r}: {exc}") from None
+        name = words[0].lower() if words else ""
+        if text is not None and name != "prog":
+            shown = line.strip() or "an empty line"
+            raise ConfigError(
+                f"{shown!r}: takes no text after its line (only 'prog load -' does: the"
+                " text of a program)"
+            )
         if not words:
             return []
-        name, args = words[0].lower(), words[1:]
+        args = words[1:]
+        if name == "prog":
+            return self._prog(args, text)
         if len(words) == 3 and words[1] == "=":  # OW5,0,C = 1
             return self._write([words[0], words[2]])
         command = self._commands.get(name)
@@ -290,7 +323,7 @@ class Console:
             raise ConfigError(
                 "signal: takes MODULE CHANNEL KIND key=value..., e.g. signal 5 0 sine"
             )
-        return set_signal(self._module(args[0]), f"signal {args[0]}", args[1:])
+        return set_signal(self._module(args[0]), f"signal {args[0]}", args[1:], self.files)
 
     def _fault(self, args: list[str]) -> list[str]:
         if len(args) < 3:
@@ -393,7 +426,7 @@ class Console:
         "peek": (1, 2, lambda c, d, h, r: c._tes_read(d, h, r, peek=True)),
         "write": (2, 2, lambda c, d, h, r: c._tes_write(d, h, r)),
         "input": (2, 2, lambda c, d, h, r: set_input(d, f"{h} input", r)),
-        "signal": (2, 64, lambda c, d, h, r: set_signal(d, f"{h} signal", r)),
+        "signal": (2, 64, lambda c, d, h, r: set_signal(d, f"{h} signal", r, c.files)),
         "fault": (2, 9, lambda c, d, h, r: set_fault(d, f"{h} fault", r)),
         "faults": (0, 0, lambda c, d, h, r: list_faults(d)),
         "status": (0, 0, lambda c, d, h, r: [tes_line(d)]),
@@ -417,8 +450,10 @@ def set_input(device: Device, head: str, args: list[str]) -> list[str]:
     return [f"{head} {name} = {value}", *([f"note: {note}"] if note else [])]
 
 
-def set_signal(device: Device, head: str, args: list[str]) -> list[str]:
-    """``NAME KIND key=value...``: the input driven by a signal (docs/signals.md)."""
+def set_signal(device: Device, head: str, args: list[str], files: bool = True) -> list[str]:
+    """``NAME KIND key=value...``: the input driven by a signal (docs/signals.md).
+    With ``files`` False (the control API's console) a signal that reads a file is
+    refused before anything is read."""
     name, kind, *pairs = args
     spec: dict[str, object] = {"kind": kind}
     for pair in pairs:
@@ -426,6 +461,13 @@ def set_signal(device: Device, head: str, args: list[str]) -> list[str]:
         if not sep:
             raise ConfigError(f"signal: {pair!r} is not key=value")
         spec[key] = value_of(value)
+    found = None if files else file_in_spec(spec, f"{head} {name}")
+    if found is not None:
+        raise ConfigError(
+            f"{found} reads a file: files are only for the stand-alone console"
+            " (fieldtwin console PLANT) and the plant file, not through the control API"
+            " (allowed here: every other kind of docs/signals.md)"
+        )
     device.input(name).drive(spec, where=f"{head} {name}")
     return [f"{head} {name} = {kind}"]
 

@@ -132,7 +132,7 @@ def _plant_routes(app: FastAPI, c: Control, run: Run) -> None:
 
     @app.post("/console", summary="run one console command line on the running plant")
     async def console(body: ConsoleBody) -> Any:
-        return await run(lambda: c.console_line(body.line), body.wait_s + 1)
+        return await run(lambda: c.console_line(body.line, body.text), body.wait_s + 1)
 
 
 def _device_routes(app: FastAPI, c: Control, run: Run) -> None:

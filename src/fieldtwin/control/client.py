@@ -243,10 +243,12 @@ class Client:
 
     # --- the console and the events ------------------------------------------------------
 
-    def console(self, line: str, wait_s: float = 60.0) -> ConsoleResult:
-        reply = self.request(
-            "POST", "/console", {"line": line, "wait_s": wait_s}, timeout=wait_s + 5
-        )
+    def console(self, line: str, wait_s: float = 60.0, *, text: str | None = None) -> ConsoleResult:
+        """One console line; ``text`` comes with it (a program's, for ``prog load -``)."""
+        body: dict[str, object] = {"line": line, "wait_s": wait_s}
+        if text is not None:
+            body["text"] = text
+        reply = self.request("POST", "/console", body, timeout=wait_s + 5)
         return ConsoleResult(list(reply["lines"]), reply["error"])
 
     def events(

@@ -20,6 +20,7 @@ from fieldtwin.errors import ConfigError, FieldtwinError
 from fieldtwin.plant import Plant
 from fieldtwin.runtime.events import EventBus
 from fieldtwin.runtime.runner import Runner
+from fieldtwin.signals.spec import file_in_spec
 from fieldtwin.tsx.plc import Plc
 from fieldtwin.tsx.txt import TextBlock
 from fieldtwin.words import format_hex
@@ -53,18 +54,14 @@ def status_json(status: DeviceStatus) -> Json:
 
 
 def refuse_files(spec: object, where: str) -> None:
-    """No request reads a file (docs/control.md, "Security"): a csv signal is refused."""
-    if isinstance(spec, Mapping):
-        if str(spec.get("kind", "")).lower() == "csv":
-            raise ConfigError(
-                f"{where}: kind 'csv' reads a file and is not allowed from the control API"
-                " (put it in the plant file; allowed here: every other kind of docs/signals.md)"
-            )
-        for key, value in spec.items():
-            refuse_files(value, f"{where}.{key}")
-    elif isinstance(spec, list):
-        for index, value in enumerate(spec):
-            refuse_files(value, f"{where}[{index}]")
+    """No request reads a file (docs/control.md, "Security"): a signal table with a
+    csv kind or a key naming a file, at any depth, is refused before it is built."""
+    found = file_in_spec(spec, where)
+    if found is not None:
+        raise ConfigError(
+            f"{found} reads a file and is not allowed from the control API"
+            " (put it in the plant file; allowed here: every other kind of docs/signals.md)"
+        )
 
 
 class Control:
@@ -74,7 +71,7 @@ class Control:
         self.plant = plant
         self.runner = runner
         self.bus = bus
-        self.console = Console(plant)
+        self.console = Console(plant, files=False)  # no request reads a file
         self._exchanges: OrderedDict[int, _Started] = OrderedDict()
         self._next_exchange = 1
 
@@ -310,10 +307,13 @@ class Control:
 
     # --- the console -------------------------------------------------------------------
 
-    def console_line(self, line: str) -> Json:
-        """One console command line on the running plant: its lines, or its error."""
+    def console_line(self, line: str, text: str | None = None) -> Json:
+        """One console command line on the running plant: its lines, or its error.
+
+        The console reads no file here: ``prog load -`` takes the program's ``text``,
+        a command that names a file is refused (docs/control.md, "The console")."""
         try:
-            return {"lines": self.console.execute(line), "error": None}
+            return {"lines": self.console.execute(line, text), "error": None}
         except FieldtwinError as exc:
             return {"lines": [], "error": str(exc)}
 

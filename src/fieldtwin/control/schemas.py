@@ -17,6 +17,7 @@ MAX_SIGNAL_KEYS = 32
 MAX_SEND_WORDS = 128  # a Text Block's send table (the AEM's longest request is far below)
 MAX_TEXT = 1024  # bytes of text a Text Block sends
 MAX_LINE = 4096  # characters of one console line
+MAX_PROGRAM_TEXT = 48 * 1024  # characters of a program's text sent with `prog load -`
 
 
 class Closed(BaseModel):
@@ -74,4 +75,9 @@ class SpeedBody(Closed):
 
 class ConsoleBody(Closed):
     line: Annotated[str, Field(max_length=MAX_LINE)]
+    text: Annotated[str, Field(max_length=MAX_PROGRAM_TEXT)] | None = Field(
+        default=None,
+        description="the text that comes with the line: a program's, for `prog load -`"
+        " (no request names a file)",
+    )
     wait_s: Annotated[float, Field(gt=0, le=3600, allow_inf_nan=False)] = 60.0

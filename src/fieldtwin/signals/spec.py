@@ -265,6 +265,34 @@ def signal_from_spec(
     return signal
 
 
+FILE_KEYS = ("file", "path")  # keys that name a file (also any key ending _file, _path)
+
+
+def file_in_spec(spec: object, where: str) -> str | None:
+    """Where a signal table would read a file, or None: a ``kind = "csv"``, or a key
+    that names a file, at any depth (inside a ``sum``, a ``noise`` base, a list).
+
+    The answer is ``where`` and the path to the place, e.g. ``sig.terms[1]: kind 'csv'``;
+    the doors that read no file (the control API, its console) refuse such a table
+    before anything is built (docs/control.md, "Security")."""
+    if isinstance(spec, Mapping):
+        if str(spec.get("kind", "")).lower() == "csv":
+            return f"{where}: kind 'csv'"
+        for key, value in spec.items():
+            name = str(key).lower()
+            if name in FILE_KEYS or name.endswith(tuple(f"_{k}" for k in FILE_KEYS)):
+                return f"{where}.{key}: a file name"
+            found = file_in_spec(value, f"{where}.{key}")
+            if found is not None:
+                return found
+    elif isinstance(spec, list | tuple):
+        for index, value in enumerate(spec):
+            found = file_in_spec(value, f"{where}[{index}]")
+            if found is not None:
+                return found
+    return None
+
+
 def is_discrete(signal: object) -> bool:
     """True for the discrete signals this package builds."""
     return isinstance(signal, DISCRETE_TYPES)

@@ -3,6 +3,11 @@
 Comma-separated, one row per point; the first row may be a header (any row whose
 time is not a number is taken as one, on line 1 only); blank lines and lines
 starting with ``#`` are skipped.  Times must not decrease.
+
+The file is read with fieldtwin.textfile's bounds (a regular file of at most
+MAX_FILE_BYTES, UTF-8).  An error names the file, the line and the column at
+fault and what is allowed, and never quotes the line: the file may be anything
+its name points at (docs/signals.md).
 """
 
 from __future__ import annotations
@@ -13,14 +18,15 @@ from pathlib import Path
 
 from fieldtwin.clock import seconds
 from fieldtwin.errors import ConfigError
+from fieldtwin.textfile import MiB, read_text
 
 _ROW_FORM = "allowed: 'time_s,value' with two numbers, times not decreasing"
-MAX_FILE_BYTES = 16 * 1024 * 1024  # a signal file is read whole: bounded (DESIGN rule 14)
+MAX_FILE_BYTES = 16 * MiB  # a signal file is read whole: bounded (DESIGN rule 14)
 
 
 def read_points(path: Path) -> list[tuple[int, float]]:
     """Rows of ``path`` as (t_us, value); ConfigError naming file and line on a bad row."""
-    text = _read_bounded(path)
+    text = read_text(path, MAX_FILE_BYTES, "signal file")
     points: list[tuple[int, float]] = []
     for line_no, row in enumerate(csv.reader(text.splitlines()), start=1):
         cells = [cell.strip() for cell in row]
@@ -31,7 +37,7 @@ def read_points(path: Path) -> list[tuple[int, float]]:
             continue
         if points and point[0] < points[-1][0]:
             raise ConfigError(
-                f"{path}:{line_no}: time {cells[0]} s is before the previous row ({_ROW_FORM})"
+                f"{path}:{line_no}: the time is before the previous row's ({_ROW_FORM})"
             )
         points.append(point)
     if not points:
@@ -39,37 +45,22 @@ def read_points(path: Path) -> list[tuple[int, float]]:
     return points
 
 
-def _read_bounded(path: Path) -> str:
-    """The file's text, at most MAX_FILE_BYTES (``/dev/zero`` or a device never ends)."""
-    try:
-        with path.open("rb") as file:
-            data = file.read(MAX_FILE_BYTES + 1)
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot read the signal file ({exc.strerror})") from None
-    if len(data) > MAX_FILE_BYTES:
-        raise ConfigError(
-            f"{path}: larger than {MAX_FILE_BYTES // (1024 * 1024)} MiB"
-            " (allowed: a CSV file of at most that size)"
-        )
-    try:
-        return data.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        raise ConfigError(f"{path}: not a UTF-8 text file ({_ROW_FORM})") from None
-
-
 def _parse_row(
     path: Path, line_no: int, cells: list[str], *, header_allowed: bool
 ) -> tuple[int, float] | None:
     where = f"{path}:{line_no}"
     if len(cells) != 2:
-        raise ConfigError(f"{where}: {len(cells)} columns in {','.join(cells)!r} ({_ROW_FORM})")
+        count = f"{len(cells)} column{'' if len(cells) == 1 else 's'}"
+        raise ConfigError(f"{where}: {count}, not 2 ({_ROW_FORM})")
     time_s, value = _number(cells[0]), _number(cells[1])
     if time_s is None and header_allowed:
         return None  # a header row
-    if time_s is None or value is None:
-        raise ConfigError(f"{where}: {','.join(cells)!r} is not two numbers ({_ROW_FORM})")
+    for number, column in ((time_s, "column 1 (time_s)"), (value, "column 2 (value)")):
+        if number is None:
+            raise ConfigError(f"{where}: {column} is not a finite number ({_ROW_FORM})")
+    assert time_s is not None and value is not None
     if time_s < 0:
-        raise ConfigError(f"{where}: time {cells[0]} s is negative ({_ROW_FORM})")
+        raise ConfigError(f"{where}: the time is negative ({_ROW_FORM})")
     return seconds(time_s), value
 
 
