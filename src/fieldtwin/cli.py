@@ -67,7 +67,7 @@ def _parser() -> argparse.ArgumentParser:
         "--speed",
         type=_speed,
         default=SUPPRESS_SPEED,
-        help="x1, x10, or max (default: the plant's [run] speed, else x1)",
+        help="x1, x10 (0.001 to 100000), or max (default: the plant's [run] speed, else x1)",
     )
     run.add_argument("--duration", type=_seconds, help="stop after this many simulated seconds")
     run.add_argument("--no-live", action="store_true", help="no live view, plain status lines")

@@ -16,6 +16,7 @@ import time
 from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
+from itertools import pairwise
 from pathlib import Path
 
 import httpx
@@ -71,7 +72,7 @@ class Poller:
     @property
     def worst_gap(self) -> float:
         times = self.answers
-        return max((b - a for a, b in zip(times, times[1:], strict=False)), default=1e9)
+        return max((b - a for a, b in pairwise(times)), default=1e9)
 
 
 @contextmanager

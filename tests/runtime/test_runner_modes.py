@@ -3,6 +3,8 @@ bounds.  A scripted wall clock: deterministic, no sleeping."""
 
 from __future__ import annotations
 
+from itertools import pairwise
+
 import pytest
 
 from fieldtwin.clock import MS, S, SimClock
@@ -79,7 +81,7 @@ def test_catch_up_is_cut_into_slices_and_the_speed_reached_is_told() -> None:
         wall.data_at(0.01 * i, line, b"?")
     runner.advance(3 * S)
     looks = [START, *wall.called_at]
-    assert max(b - a for a, b in zip(looks, looks[1:], strict=False)) <= CATCH_UP_SLICE_S + 0.0015
+    assert max(b - a for a, b in pairwise(looks)) <= CATCH_UP_SLICE_S + 0.0015
     reached = runner.speed_reached
     assert reached is not None and 0.8 < reached < 1.2
     assert runner.lagging
