@@ -34,7 +34,7 @@ PIPE_CLOSED = 141
 
 
 def _speed(text: str) -> float | None:
-    from fieldtwin.plant import MAX_SPEED
+    from fieldtwin.runtime.pace import MAX_SPEED, MIN_SPEED
 
     if text.lower() == "max":
         return None
@@ -44,9 +44,9 @@ def _speed(text: str) -> float | None:
         raise argparse.ArgumentTypeError(
             f"{text!r} not allowed (allowed: a speed factor such as 1, 10 or x10, or max)"
         ) from None
-    if not 0 < value <= MAX_SPEED:
+    if not MIN_SPEED <= value <= MAX_SPEED:
         raise argparse.ArgumentTypeError(
-            f"{text!r}: the speed factor must be > 0 and at most {MAX_SPEED:g} (or max)"
+            f"{text!r}: the speed factor must be from {MIN_SPEED:g} to {MAX_SPEED:g} (or max)"
         )
     return value
 
@@ -73,7 +73,7 @@ def _parser() -> argparse.ArgumentParser:
         "--speed",
         type=_speed,
         default=SUPPRESS_SPEED,
-        help="x1, x10, or max (default: the plant's [run] speed, else x1)",
+        help="x1, x10 (0.001 to 100000), or max (default: the plant's [run] speed, else x1)",
     )
     run.add_argument("--duration", type=_seconds, help="stop after this many simulated seconds")
     run.add_argument("--no-live", action="store_true", help="no live view, plain status lines")
@@ -279,6 +279,7 @@ def _run(args: argparse.Namespace) -> int:
     speed = own_speed if args.speed is SUPPRESS_SPEED else args.speed
     clock = SimClock()
     runner = Runner(clock, speed)
+    stop_on_signals(runner)  # from here on a stop is never lost (issue 20)
     plant = build_plant(plant_file, runner=runner, speed=speed)
     control: Launched | None = None
     try:
@@ -317,7 +318,6 @@ def _run(args: argparse.Namespace) -> int:
             print(line, flush=True)
         for warning in control.warnings:
             print(warning, file=sys.stderr, flush=True)
-    signal.signal(signal.SIGTERM, lambda *_: runner.stop())
     # the plant lives as long as the process: the cyclic collector need not walk its
     # objects again and again (1000 TES: half the time of an edge; docs/decisions.md)
     gc.collect()
@@ -332,7 +332,7 @@ def _run(args: argparse.Namespace) -> int:
         if end is not None and now >= end:
             runner.stop()
         if live_view is not None:
-            live_view.update(render(plant, endpoints))
+            live_view.update(render(plant, endpoints, runner))
         elif args.status_every > 0 and now >= next_status[0]:
             next_status[0] = now + round(args.status_every * S)
             print("\n".join(plain_status(plant)), flush=True)
@@ -342,11 +342,14 @@ def _run(args: argparse.Namespace) -> int:
         if live:
             from rich.live import Live
 
-            with Live(render(plant, endpoints), refresh_per_second=5) as live_view:
+            with Live(render(plant, endpoints, runner), refresh_per_second=5) as live_view:
                 runner.run_forever(tick, tick_us=_tick(speed))
         else:
             runner.run_forever(tick, tick_us=_tick(speed))
     finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)  # the run ended: no forced stop
+        for number in (signal.SIGTERM, signal.SIGINT):  # closing: a signal cuts it short
+            signal.signal(number, _interrupt)
         final = [] if live else plain_status(plant)  # the plant as it stopped (issue 10 item 21)
         if control is not None:
             control.close()
@@ -355,6 +358,31 @@ def _run(args: argparse.Namespace) -> int:
         print("\n".join(final), flush=True)
     print(f"stopped at t = {clock.now / S:.3f} s", flush=True)
     return 0
+
+
+STOP_GRACE_S = 1.5  # after SIGTERM/SIGINT, the most wall time the run has to end by itself
+
+
+def _interrupt(*_: object) -> None:
+    raise KeyboardInterrupt
+
+
+def stop_on_signals(runner: Runner) -> None:
+    """SIGTERM and SIGINT end the run within STOP_GRACE_S (issue 20, docs/decisions.md
+    "Bounded catch-up and runner modes"): the first asks ``runner.stop()`` (a latch, not
+    lost if it comes before the run starts) and arms a timer; if the run has not ended
+    when it rings (an instant that never ends), or at a second signal, KeyboardInterrupt
+    is raised where the program stands, and the plant is closed on the way out."""
+
+    def stop(*_: object) -> None:
+        if runner.stopping:
+            _interrupt()
+        runner.stop()
+        signal.setitimer(signal.ITIMER_REAL, STOP_GRACE_S)
+
+    signal.signal(signal.SIGALRM, _interrupt)
+    signal.signal(signal.SIGTERM, stop)
+    signal.signal(signal.SIGINT, stop)
 
 
 def _recorders(args: argparse.Namespace, events: EventBus) -> Binding:

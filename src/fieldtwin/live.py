@@ -19,6 +19,7 @@ from fieldtwin.clock import S
 from fieldtwin.devices.face import Device, DeviceStatus, TesAddress
 from fieldtwin.errors import FieldtwinError
 from fieldtwin.plant import Plant
+from fieldtwin.runtime.runner import Runner
 from fieldtwin.tsx.plc import Plc
 
 WIDE = 150  # a column per LED, the input and output bits in binary
@@ -30,22 +31,25 @@ _ALARM = {"ERR", "F"}  # LEDs that are red when lit
 class LiveView:
     """A renderable that lays itself out for the width it is given."""
 
-    def __init__(self, plant: Plant, endpoints: list[str]) -> None:
+    def __init__(self, plant: Plant, endpoints: list[str], runner: Runner | None = None) -> None:
         self.plant = plant
         self.endpoints = endpoints
+        self.runner = runner
 
     def __rich_console__(self, console: Console, options: ConsoleOptions) -> RenderResult:
-        yield _render(self.plant, self.endpoints, options.max_width)
+        yield _render(self.plant, self.endpoints, options.max_width, self.runner)
 
 
-def render(plant: Plant, endpoints: list[str]) -> LiveView:
-    """A rich renderable: the PLC rack and its modules, the TES, the endpoints."""
-    return LiveView(plant, endpoints)
+def render(plant: Plant, endpoints: list[str], runner: Runner | None = None) -> LiveView:
+    """A rich renderable: the PLC rack and its modules, the TES, the endpoints; with the
+    ``runner``, the speed it reaches beside the speed asked."""
+    return LiveView(plant, endpoints, runner)
 
 
-def _render(plant: Plant, endpoints: list[str], width: int) -> Group:
+def _render(plant: Plant, endpoints: list[str], width: int, runner: Runner | None) -> Group:
+    speed = _speed(plant) + _reached(plant, runner)
     parts: list[Table | Text] = [
-        Text(f"{plant.title}   t = {plant.clock.now / S:,.1f} s   speed {_speed(plant)}", "bold")
+        Text(f"{plant.title}   t = {plant.clock.now / S:,.1f} s   speed {speed}", "bold")
     ]
     if plant.plc is not None:
         plc = plant.plc
@@ -190,6 +194,17 @@ def tes_line(device: Device) -> str:
 
 def _speed(plant: Plant) -> str:
     return "max" if plant.speed is None else f"x{plant.speed:g}"
+
+
+def _reached(plant: Plant, runner: Runner | None) -> str:
+    """`` (reached x312)`` when the speed reached is not the speed asked (issue 20)."""
+    reached = None if runner is None else runner.speed_reached
+    if reached is None or (
+        plant.speed is not None and abs(reached - plant.speed) < 0.05 * plant.speed
+    ):
+        return ""
+    slow = runner is not None and runner.lagging
+    return f" ({'only ' if slow else ''}x{reached:.3g} reached)"
 
 
 def plain_status(plant: Plant) -> list[str]:

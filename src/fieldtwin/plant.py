@@ -44,6 +44,7 @@ from fieldtwin.devices.schema import table_at
 from fieldtwin.devices.tes import TesDevice
 from fieldtwin.errors import ConfigError
 from fieldtwin.runtime.events import EventBus
+from fieldtwin.runtime.pace import MAX_SPEED, MIN_SPEED
 from fieldtwin.tes.model import Tes
 from fieldtwin.tsx.plc import MODELS, Plc
 from fieldtwin.tsx.plcmemory import TxtDeclaration
@@ -60,7 +61,6 @@ FROM_PLANT = "from plant"  # build_plant(speed=FROM_PLANT): take [run] speed
 TOP_LEVEL = ("plant", "plc", "module", "tes", "run")
 
 MAX_PLANT_BYTES = 4 * 1024 * 1024  # a plant file is read whole: bounded (DESIGN rule 14)
-MAX_SPEED = 1e6  # the largest speed factor: past it, "max" is what is meant
 
 
 @dataclass(frozen=True, slots=True)
@@ -414,10 +414,10 @@ def _speed(value: object, where: str) -> float | None:
     if value == "max":
         return None
     number = isinstance(value, int | float) and not isinstance(value, bool)
-    if not number or not 0 < value <= MAX_SPEED:  # type: ignore[operator]
+    if not number or not MIN_SPEED <= value <= MAX_SPEED:  # type: ignore[operator]
         raise ConfigError(
-            f"{where}: {value!r} not allowed (allowed a number > 0 and at most {MAX_SPEED:g},"
-            ' or "max")'
+            f"{where}: {value!r} not allowed (allowed a number from {MIN_SPEED:g}"
+            f' to {MAX_SPEED:g}, or "max")'
         )
     return float(value)  # type: ignore[arg-type]
 

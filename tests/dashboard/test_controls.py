@@ -39,7 +39,8 @@ def test_clock_pause_step_speed_and_resume(page: Any, plant: Running) -> None:
     page.click("#set-speed")
     page.click("#resume")
     page.wait_for_function("!document.querySelector('#clock').textContent.includes('paused')")
-    assert api(plant, "/clock") | {"t_s": 0, "t_us": 0} == {
+    clock = {k: v for k, v in api(plant, "/clock").items() if k in ("paused", "speed")}
+    assert clock | {"t_s": 0, "t_us": 0} == {
         "t_s": 0, "t_us": 0, "paused": False, "speed": 4.0,
     }  # fmt: skip
 

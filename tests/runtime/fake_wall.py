@@ -94,6 +94,7 @@ class FakeWall:
     def __init__(self) -> None:
         self.now = START
         self.waits: list[float | None] = []
+        self.called_at: list[float] = []  # the fake time of every wait: when the runner looked
         self._arrivals: list[_Arrival] = []
         self._targets: list[FakeLine | FakeListener] = []
         self.fds: set[int] = set()  # what the runner watches for reading
@@ -139,6 +140,7 @@ class FakeWall:
         fds = self.fds
         assert timeout is None or timeout >= 0, f"negative wait {timeout}"
         self.waits.append(timeout)
+        self.called_at.append(self.now)
         pending = [a for a in self._arrivals if a.target.fileno() in fds]
         if pending and (timeout is None or pending[0].at <= self.now + timeout):
             self.now = max(self.now, pending[0].at)

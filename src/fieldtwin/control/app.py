@@ -10,6 +10,7 @@ mistake the plant names, 404 for an unknown device, input, fault or exchange,
 
 from __future__ import annotations
 
+import asyncio
 from collections.abc import Callable, Sequence
 from typing import Any, TypeVar
 
@@ -27,6 +28,7 @@ from fieldtwin.control.schemas import (
     ExchangeBody,
     FaultBody,
     InputBody,
+    ModeBody,
     ModuleBody,
     ObjectBody,
     PowerBreakBody,
@@ -40,7 +42,7 @@ from fieldtwin.errors import ConfigError
 from fieldtwin.runtime.inbox import InboxClosed, InboxFull
 
 T = TypeVar("T")
-CLOCK_WAIT_S = 3600.0  # a step or a run-until may take as long as it runs at the speed
+MODE_POLL_S = 0.25  # a request waiting for a mode's end looks this often for a stopped run
 
 
 _TYPE_TAGS = {"bool", "int", "float", "str", "list", "dict", "none"}
@@ -194,9 +196,9 @@ def _plc_routes(app: FastAPI, c: Control, run: Run) -> None:
     async def poll(ident: int) -> Any:
         return await run(lambda: c.exchange(ident))
 
-    @app.post("/plc/power-break", summary="cut the PLC supply for some seconds; it returns")
+    @app.post("/plc/power-break", summary="cut the PLC supply for some seconds (a mode)")
     async def power_break(body: PowerBreakBody) -> Any:
-        return await run(lambda: c.power_break(body.seconds), CLOCK_WAIT_S)
+        return await _mode(run, c, lambda: c.power_break(body.seconds), body)
 
     @app.post("/plc/remove", summary="pull a module out of its slot under power")
     async def remove(body: ModuleBody) -> Any:
@@ -205,6 +207,26 @@ def _plc_routes(app: FastAPI, c: Control, run: Run) -> None:
     @app.post("/plc/insert", summary="put a module back (it runs its self-test)")
     async def insert(body: ModuleBody) -> Any:
         return await run(lambda: c.insert(body.module))
+
+
+async def _mode(run: Run, c: Control, start: Callable[[], Any], body: ModeBody) -> Any:
+    """Start a runner mode (step, run-until, power-break); its state at once, or with
+    ``wait`` at its end (at most ``wait_s``; the run stopping ends the wait too)."""
+    state, ended = await run(lambda: (start(), c.mode_ended))
+    if not body.wait or ended is None:
+        return state
+    done = asyncio.wrap_future(ended)
+    loop = asyncio.get_running_loop()
+    deadline = loop.time() + body.wait_s
+    try:
+        while not done.done() and c.runner.running and loop.time() < deadline:
+            await asyncio.wait({done}, timeout=min(MODE_POLL_S, deadline - loop.time()))
+    finally:
+        if not done.done():
+            done.cancel()  # the mode's own future runs on (it cannot be cancelled)
+    if done.done():
+        return done.result()
+    return await run(c.clock_state)  # still running: the mode as it stands
 
 
 def _clock_routes(app: FastAPI, c: Control, run: Run) -> None:
@@ -220,13 +242,13 @@ def _clock_routes(app: FastAPI, c: Control, run: Run) -> None:
     async def resume() -> Any:
         return await run(c.resume)
 
-    @app.post("/clock/step", summary="run simulated time by ms (paused or not)")
+    @app.post("/clock/step", summary="run simulated time by ms, paused or not (a mode)")
     async def step(body: StepBody) -> Any:
-        return await run(lambda: c.step(body.ms), CLOCK_WAIT_S)
+        return await _mode(run, c, lambda: c.step(body.ms), body)
 
-    @app.post("/clock/run-until", summary="run simulated time until t_s")
+    @app.post("/clock/run-until", summary="run simulated time until t_s (a mode)")
     async def run_until(body: RunUntilBody) -> Any:
-        return await run(lambda: c.run_until(body.t_s), CLOCK_WAIT_S)
+        return await _mode(run, c, lambda: c.run_until(body.t_s), body)
 
     @app.put("/clock/speed", summary="change the speed factor (or max)")
     async def speed(body: SpeedBody) -> Any:

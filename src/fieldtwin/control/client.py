@@ -29,6 +29,7 @@ if TYPE_CHECKING:
     from websockets.sync.client import ClientConnection
 
 DEFAULT_TIMEOUT_S = 30.0
+DEFAULT_MODE_WAIT_S = 60.0  # how long step/run_until/power_break wait for the mode's end
 
 
 class ControlError(FieldtwinError):
@@ -212,8 +213,12 @@ class Client:
                 raise ControlError(0, f"exchange {ident} not done after {timeout_s:g} s", state)
             time.sleep(0.02)
 
-    def power_break(self, seconds: float) -> dict[str, Any]:
-        return dict(self.request("POST", "/plc/power-break", {"seconds": seconds}))
+    def power_break(
+        self, seconds: float, *, wait: bool = True, wait_s: float = DEFAULT_MODE_WAIT_S
+    ) -> dict[str, Any]:
+        """Cut the PLC supply for ``seconds`` (simulated); with ``wait``, answered when the
+        power is back (at most ``wait_s`` wall seconds), else at once (a runner mode)."""
+        return self._mode("/plc/power-break", {"seconds": seconds}, wait, wait_s)
 
     def remove(self, module: str) -> dict[str, Any]:
         return dict(self.request("POST", "/plc/remove", {"module": module}))
@@ -232,11 +237,24 @@ class Client:
     def resume(self) -> dict[str, Any]:
         return dict(self.request("POST", "/clock/resume"))
 
-    def step(self, ms: float) -> dict[str, Any]:
-        return dict(self.request("POST", "/clock/step", {"ms": ms}))
+    def step(
+        self, ms: float, *, wait: bool = True, wait_s: float = DEFAULT_MODE_WAIT_S
+    ) -> dict[str, Any]:
+        """Run simulated time by ``ms``, paused or not; with ``wait`` the answer comes at
+        the step's end (at most ``wait_s`` wall seconds), else at once (docs/control.md)."""
+        return self._mode("/clock/step", {"ms": ms}, wait, wait_s)
 
-    def run_until(self, t_s: float) -> dict[str, Any]:
-        return dict(self.request("POST", "/clock/run-until", {"t_s": t_s}))
+    def run_until(
+        self, t_s: float, *, wait: bool = True, wait_s: float = DEFAULT_MODE_WAIT_S
+    ) -> dict[str, Any]:
+        """Run simulated time until ``t_s``; ``wait`` as for ``step``."""
+        return self._mode("/clock/run-until", {"t_s": t_s}, wait, wait_s)
+
+    def _mode(self, path: str, body: dict[str, Any], wait: bool, wait_s: float) -> dict[str, Any]:
+        body = {**body, "wait": wait, "wait_s": wait_s} if wait else body
+        timeout = wait_s + DEFAULT_TIMEOUT_S if wait else None
+        extra: dict[str, Any] = {} if timeout is None else {"timeout": timeout}
+        return dict(self.request("POST", path, body, **extra))
 
     def set_speed(self, speed: float | str) -> dict[str, Any]:
         return dict(self.request("PUT", "/clock/speed", {"speed": speed}))

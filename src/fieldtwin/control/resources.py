@@ -9,10 +9,12 @@ or Text Block exchange) and changes nothing.
 from __future__ import annotations
 
 from collections import OrderedDict
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+from concurrent.futures import Future
 from dataclasses import dataclass
 
 from fieldtwin.clock import MS, S
+from fieldtwin.clock import seconds as to_us
 from fieldtwin.console import Console
 from fieldtwin.console_syntax import module_address
 from fieldtwin.devices.face import Device, DeviceStatus, Family, Input, device_id
@@ -71,7 +73,9 @@ class Control:
         self.plant = plant
         self.runner = runner
         self.bus = bus
-        self.console = Console(plant, files=False)  # no request reads a file
+        # no request reads a file; a console advance through the API ends at a stop (SIGTERM) with the run around it
+        self.console = Console(plant, files=False, interrupted=lambda: runner.stopping)
+        self.mode_ended: Future[Json] | None = None  # the end of the last mode started
         self._exchanges: OrderedDict[int, _Started] = OrderedDict()
         self._next_exchange = 1
 
@@ -255,8 +259,11 @@ class Control:
         return out
 
     def power_break(self, seconds: float) -> Json:
-        self.plc.power_break(seconds)
-        return {"power": "back", "t_s": self.plant.clock.now / S}
+        """The PLC's supply cut now, back in ``seconds``: a runner mode (the clock section)."""
+        self.runner.end_mode()  # a break in progress ends (power back) before this one
+        power_back = self.plc.cut_power(seconds)
+        until = self.plant.clock.now + to_us(seconds)
+        return self._start("power-break", until, "power back", power_back)
 
     def remove(self, module: str) -> Json:
         rack, slot = module_address(module)
@@ -269,20 +276,53 @@ class Control:
         return {"module": module, "present": True}
 
     # --- the clock -----------------------------------------------------------------------
+    # step, run-until and power-break are runner modes (docs/control.md, "The clock"): the
+    # command starts one and answers at once; the mode's end is a clock event that
+    # publishes a clock event and settles ``mode_ended`` (what a waiting request awaits).
 
     def clock_json(self) -> Json:
-        speed = self.runner.speed
+        """The clock as GET /clock shows it: its state and the speed reached (measured
+        on the wall, so never part of a command's answer, which a replay gives again)."""
+        reached = self.runner.speed_reached
+        return {
+            **self.clock_state(),
+            "speed_reached": None if reached is None else float(f"{reached:.4g}"),
+            "speed_kept": not self.runner.lagging,
+        }
+
+    def clock_state(self) -> Json:
+        speed, mode = self.runner.speed, self.runner.mode
         return {
             "t_s": self.plant.clock.now / S,
             "t_us": self.plant.clock.now,
             "paused": self.runner.paused,
             "speed": "max" if speed is None else speed,
+            "mode": None if mode is None else mode.name,
+            "until_s": None if mode is None else mode.until / S,
         }
 
-    def _clock_event(self, what: str) -> Json:
-        state = self.clock_json()
+    def _clock_event(self, what: str, extra: Json | None = None) -> Json:
+        state = {**self.clock_state(), **(extra or {})}
         self.bus.publish(self.plant.clock.now, "clock", "clock", {"what": what, **state})
         return state
+
+    def _start(
+        self, name: str, until: int, what: str, then: Callable[[], None] | None = None
+    ) -> Json:
+        """Start the runner mode ``name`` until ``until``; ``then`` runs at its end."""
+        ended: Future[Json] = Future()
+        ended.set_running_or_notify_cancel()  # a waiter that leaves cannot cancel it
+        power: Json = {"power": "off"} if then is not None else {}
+
+        def end(now: int, cut: bool) -> None:
+            if then is not None:
+                then()
+            back = {"power": "back"} if then is not None else {}
+            ended.set_result(self._clock_event(what, {**back, "cut": cut}))
+
+        self.runner.start_mode(name, until, end)
+        self.mode_ended = ended
+        return self._clock_event(name, power)
 
     def pause(self) -> Json:
         self.runner.pause()
@@ -293,12 +333,10 @@ class Control:
         return self._clock_event("resumed")
 
     def step(self, ms: float) -> Json:
-        self.runner.step(round(ms * MS))
-        return self._clock_event("stepped")
+        return self._start("step", self.plant.clock.now + round(ms * MS), "stepped")
 
     def run_until(self, t_s: float) -> Json:
-        self.runner.run_to(round(t_s * S))
-        return self._clock_event("ran")
+        return self._start("run-until", round(t_s * S), "ran")
 
     def set_speed(self, speed: float | None) -> Json:
         self.runner.set_speed(speed)

@@ -10,6 +10,8 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from fieldtwin.runtime.pace import MAX_SPEED, MIN_SPEED
+
 Word = Annotated[int, Field(ge=0, le=0xFFFF, description="a 16-bit word, 0..65535")]
 Number = Annotated[float, Field(allow_inf_nan=False)]
 Name = Annotated[str, Field(min_length=1, max_length=64)]
@@ -53,7 +55,20 @@ class ExchangeBody(Closed):
     txt: Annotated[int, Field(ge=0, le=63)] = 0  # TXT0..TXT63 (AEM 3.5-1: N/MAX 64)
 
 
-class PowerBreakBody(Closed):
+MAX_MODE_WAIT_S = 3600.0  # the longest a request may wait for its mode's end
+
+
+class ModeBody(Closed):
+    """A command that starts a runner mode answers at once; with ``wait`` it answers at
+    the mode's end, or after ``wait_s`` wall seconds with the mode still running."""
+
+    wait: bool = Field(default=False, description="answer at the mode's end (bounded)")
+    wait_s: Annotated[float, Field(gt=0, le=MAX_MODE_WAIT_S, allow_inf_nan=False)] = Field(
+        default=60.0, description="with wait: the longest wait, wall seconds"
+    )
+
+
+class PowerBreakBody(ModeBody):
     seconds: Annotated[float, Field(ge=0, le=3600, allow_inf_nan=False)]
 
 
@@ -61,16 +76,27 @@ class ModuleBody(Closed):
     module: Annotated[str, Field(pattern=r"^\d{1,2}$", description="5 (rack 0) or 23")]
 
 
-class StepBody(Closed):
+class StepBody(ModeBody):
     ms: Annotated[float, Field(gt=0, le=86_400_000, allow_inf_nan=False)]
 
 
-class RunUntilBody(Closed):
+class RunUntilBody(ModeBody):
     t_s: Annotated[float, Field(ge=0, le=1e9, allow_inf_nan=False)]
 
 
 class SpeedBody(Closed):
-    speed: Annotated[float, Field(gt=0, le=1e6, allow_inf_nan=False)] | Literal["max"]
+    speed: (
+        Annotated[
+            float,
+            Field(
+                ge=MIN_SPEED,
+                le=MAX_SPEED,
+                allow_inf_nan=False,
+                description=f"a factor from {MIN_SPEED:g} to {MAX_SPEED:g}",
+            ),
+        ]
+        | Literal["max"]
+    )
 
 
 class ConsoleBody(Closed):

@@ -36,6 +36,14 @@ Three ways to run, chosen afresh on every cycle (attachments may change):
 With nothing scheduled and no end, the runner waits on the wall (time follows
 at ``speed``, or x1) instead of spinning.  Every single wait is at most
 MAX_WAIT_S, so a ``stop()`` from another thread is seen within that time.
+``stop()`` is a latch: a stop asked before a run starts ends it at once, nested
+runs see it too, and only the outermost run it ends takes it down.
+
+Catch-up is bounded (fieldtwin.runtime.pace, issue 20): a paced cycle that finds
+the clock behind the wall runs at most CATCH_UP_SLICE_S of wall time of instants,
+then serves commands, descriptors and the stop flag; once the clock lags its pace
+by more than MAX_LAG_S the pace is moved to where the clock stands (the plant
+runs as fast as it can, ``speed_reached`` says how fast; reported once).
 
 Commands from other threads (the control API) come through an inbox
 (fieldtwin.runtime.inbox) given to ``take_commands``: its wakeup descriptor is
@@ -46,7 +54,10 @@ pumping the transports, takes no other command until it ends, and passes a
 ``stop()`` on to the run around it.  ``pause``/``resume`` hold simulated time
 (the transports are not read while paused; the inbox still is), ``step`` and
 ``run_to`` run it by a given amount while paused or not, ``set_speed`` changes
-the pace without a jump in simulated time.
+the pace without a jump in simulated time.  ``start_mode`` is their form that
+holds nothing: the outermost run goes on to the mode's end (paused or not)
+between its cycles, taking commands all along; the end is a clock event (the
+same in a replay), and a new mode or ``pause`` replaces the one in progress.
 """
 
 from __future__ import annotations
@@ -60,6 +71,15 @@ from typing import Protocol
 from fieldtwin.clock import SimClock
 from fieldtwin.errors import ConfigError, TransportError
 from fieldtwin.runtime.inbox import Inbox
+from fieldtwin.runtime.pace import (
+    CATCH_UP_SLICE_S,
+    MAX_LAG_S,
+    REACHED_WINDOW_S,
+    Mode,
+    Pace,
+    SpeedMeter,
+    check_speed,
+)
 from fieldtwin.runtime.wall import SystemWall, WallClock
 from fieldtwin.transports.base import AcceptFailed, FdTransport, Flushable, Listener, Transport
 
@@ -78,6 +98,7 @@ OUTPUT_BOUND = 4096
 # left alone this long, doubled on each failure up to the max, then tried again.
 ACCEPT_BACKOFF_S = 0.01
 ACCEPT_BACKOFF_MAX_S = 1.0
+MODE_LAST = 1 << 30  # a mode's end runs after every other event of its instant
 
 
 class AttachTap(Protocol):
@@ -114,21 +135,6 @@ class _Accepting:
     failing: bool = False  # reported, not yet accepting again
 
 
-@dataclass(slots=True)
-class _Pace:
-    """The wall <-> simulated time mapping of one run: (wall0, sim0) at ``speed``."""
-
-    wall0: float
-    sim0: int
-    speed: float
-
-    def sim_at(self, wall: float) -> int:
-        return self.sim0 + round((wall - self.wall0) * self.speed * 1_000_000)
-
-    def wall_at(self, sim: int) -> float:
-        return self.wall0 + (sim - self.sim0) / (self.speed * 1_000_000)
-
-
 class Runner:
     """Runs a SimClock against the wall clock, delivering transport bytes as they arrive."""
 
@@ -140,10 +146,8 @@ class Runner:
         wall: WallClock | None = None,
         report: Report | None = None,
     ) -> None:
-        if speed is not None and not speed > 0:
-            raise ConfigError(f"runner speed={speed!r}: allowed a factor > 0, or None (fastest)")
         self.clock = clock
-        self.speed = speed
+        self.speed = check_speed(speed, "runner speed")
         self.report: Report = report or _to_stderr
         self._wall: WallClock = wall or SystemWall()
         # fast mode: the least wall time between two polls while events run (0: every instant)
@@ -168,9 +172,13 @@ class Runner:
         self._paused = False
         self._stepping = 0  # nested runs of step/run_to: they run while paused
         self._depth = 0  # nested _run calls (a command that runs the clock)
-        self._paces: list[_Pace] = []  # the pace of every run in progress, outermost first
+        self._paces: list[Pace] = []  # the pace of every run in progress, outermost first
         self.tap: AttachTap | None = None  # a recording: sees every attachment (set_tap)
         self._pace_holders = 0  # servers of real lines that keep the run paced (hold_pace)
+        self._mode: Mode | None = None  # a step, run-until, power break in progress
+        self._meter = SpeedMeter()
+        self._lagged_at = float("-inf")  # wall time the pace was last moved (speed not kept)
+        self._lag_told = False
 
     # ----------------------------------------------------------------- attachments
 
@@ -327,21 +335,98 @@ class Runner:
         return self._paused
 
     def pause(self) -> None:
-        """Hold simulated time (from the simulation's thread: a command)."""
+        """Hold simulated time (from the simulation's thread: a command); a mode in
+        progress ends here (cut)."""
+        self.end_mode()
         self._paused = True
+        self._meter.reset()
 
     def resume(self) -> None:
         """Let simulated time run again, from where it stood (no jump)."""
         if self._paused:
             self._paused = False
             self._repace()
+            self._meter.reset()
 
     def set_speed(self, speed: float | None) -> None:
         """A new speed factor (None: as fast as possible), effective at once, no jump."""
-        if speed is not None and not speed > 0:
-            raise ConfigError(f"runner speed={speed!r}: allowed a factor > 0, or None (fastest)")
-        self.speed = speed
+        self.speed = check_speed(speed, "runner speed")
         self._repace()
+        self._meter.reset()
+        self._lagged_at = float("-inf")
+
+    # -- modes (issue 20 item 5): long runs that hold nothing
+
+    @property
+    def mode(self) -> Mode | None:
+        """The mode in progress (its ``name`` and ``until``), or None."""
+        return self._mode
+
+    def start_mode(
+        self, name: str, until_us: int, on_end: Callable[[int, bool], None] | None = None
+    ) -> Mode:
+        """Run simulated time to ``until_us`` (paused or not) between the runner's cycles;
+        ``on_end(now, cut)`` at its end, a clock event after the others of its instant.
+        The mode in progress, if any, ends first (cut)."""
+        if until_us < self.clock.now:
+            raise ConfigError(
+                f"cannot run until t = {until_us / 1e6:g} s: simulated time is already"
+                f" {self.clock.now / 1e6:.6f} s and never goes back"
+            )
+        self.end_mode()
+        mode = Mode(name, until_us, on_end)
+        mode.handle = self.clock.schedule(until_us, lambda now: self._mode_due(mode), MODE_LAST)
+        self._mode = mode
+        self._repace()  # from where the clock stands, paused or not
+        self._meter.reset()
+        return mode
+
+    def end_mode(self) -> None:
+        """End the mode in progress now (cut); nothing if none."""
+        mode = self._mode
+        if mode is None:
+            return
+        self._mode = None
+        if mode.handle is not None:
+            mode.handle.cancel()
+        if mode.on_end is not None:
+            mode.on_end(self.clock.now, True)
+
+    def _mode_due(self, mode: Mode) -> None:
+        if self._mode is mode:
+            self._mode = None
+            if self._paused:
+                self._meter.reset()
+            if mode.on_end is not None:
+                mode.on_end(self.clock.now, False)
+
+    # -- the speed reached (issue 20 item 1)
+
+    @property
+    def speed_reached(self) -> float | None:
+        """Simulated seconds per wall second over the last REACHED_WINDOW_S while time
+        runs (None while held or before two samples)."""
+        return None if self._holding() else self._meter.reached
+
+    @property
+    def lagging(self) -> bool:
+        """True while the plant does not keep ``speed`` (the pace was moved lately)."""
+        return self._wall.monotonic() - self._lagged_at < REACHED_WINDOW_S
+
+    def _keep_pace(self, woke: float, pace: Pace) -> None:
+        """After a paced cycle: sample the speed; move the pace if the clock lags too far."""
+        self._meter.sample(woke, self.clock.now)
+        if woke - pace.wall_at(self.clock.now) <= MAX_LAG_S:
+            return
+        self._repace()
+        self._lagged_at = woke
+        self._next_tick = min(self._next_tick, self.clock.now)  # ticks come on the wall too
+        if not self._lag_told:
+            self._lag_told = True
+            self.report(
+                f"the plant cannot keep speed x{pace.speed:g}: it runs as fast as it can"
+                " (the speed reached is in GET /clock and the status line)"
+            )
 
     def step(self, duration_us: int) -> None:
         """Run simulated time by ``duration_us`` at the current speed, paused or not."""
@@ -369,7 +454,13 @@ class Runner:
 
     def _holding(self) -> bool:
         """Paused, with an inbox to resume from, outside a step and a command's own run."""
-        return self._paused and self._inbox is not None and not self._stepping and self._depth == 1
+        return (
+            self._paused
+            and self._inbox is not None
+            and not self._stepping
+            and self._depth == 1
+            and self._mode is None
+        )
 
     def _hold(self) -> None:
         """Paused: no simulated time, no transport read; wait for a command (bounded)."""
@@ -413,16 +504,26 @@ class Runner:
             self._tick = None
 
     def stop(self) -> None:
-        """End the current run (advance, run_until or run_forever) after the running instant."""
+        """End the current run (advance, run_until or run_forever) after the running
+        instant; asked before a run starts, it ends that run at once (a latch)."""
         self._stopping = True
+
+    @property
+    def running(self) -> bool:
+        """A run (advance, run_until, run_forever) is in progress."""
+        return self._depth > 0
+
+    @property
+    def stopping(self) -> bool:
+        """A stop is asked and not yet taken by the run it ends."""
+        return self._stopping
 
     # ----------------------------------------------------------------- the loop
 
     def _run(self, end: int | None, predicate: Callable[[], bool] | None) -> None:
-        outer = (self._predicate, self._stopping)
-        self._stopping = False
+        outer = self._predicate
         self._predicate = predicate
-        pace = _Pace(self._wall.monotonic(), self.clock.now, self.speed or 1.0)
+        pace = Pace(self._wall.monotonic(), self.clock.now, self.speed or 1.0)
         self._next_poll = float("-inf")  # a run polls before its first instant
         self._paces.append(pace)
         self._depth += 1
@@ -432,15 +533,16 @@ class Runner:
         finally:
             self._depth -= 1
             self._paces.pop()
-            stopped = self._stopping
-            self._predicate = outer[0]
-            # a stop() inside a nested run (a command's advance) ends the outer run too
-            self._stopping = outer[1] or (stopped and self._depth > 0)
+            self._predicate = outer
+            # the stop latch: a nested run (a command's advance) passes it on to the run
+            # around it; the outermost run takes it down
+            if self._depth == 0:
+                self._stopping = False
 
     def _done(self) -> bool:
         return self._stopping or (self._predicate is not None and self._predicate())
 
-    def _cycle(self, end: int | None, pace: _Pace) -> bool:
+    def _cycle(self, end: int | None, pace: Pace) -> bool:
         """One wait-and-run step; False once the end is reached."""
         self._commands()
         if self._holding():
@@ -454,6 +556,10 @@ class Runner:
         busy = deadline is not None and (end is None or deadline <= end)
         if not busy and end is not None and clock.now >= end:
             return False
+        mode = self._mode
+        if mode is not None and self._depth == 1:  # never past a mode's end in one go
+            end = mode.until if end is None else min(end, mode.until)
+            busy = deadline is not None and deadline <= end
         target = deadline if busy else end
         if self.paced:
             self._paced_step(self._soonest(target), end, pace)
@@ -488,10 +594,11 @@ class Runner:
         timeout = MAX_WAIT_S if wake is None else (wake - self.clock.now) / 1_000_000 / speed
         start = self._wall.monotonic()
         self._handle(self._wall.wait(min(timeout, self._wait_cap())))
-        waited = (self._wall.monotonic() - start) * speed
-        self._settle(self._clamp(self.clock.now + round(waited * 1_000_000), end))
+        woke = self._wall.monotonic()
+        self._settle(self._clamp(self.clock.now + round((woke - start) * speed * 1e6), end))
+        self._meter.sample(woke, self.clock.now)
 
-    def _paced_step(self, target: int | None, end: int | None, pace: _Pace) -> None:
+    def _paced_step(self, target: int | None, end: int | None, pace: Pace) -> None:
         wall = self._wall
         # a wall's lead (precise waits: wire-timed replies) runs a due instant that much
         # wall time early; bytes that arrive are still timed by the wall as it is
@@ -503,15 +610,16 @@ class Runner:
         ready = self._handle(wall.wait(min(timeout, self._wait_cap())))
         woke = wall.monotonic()
         reached = self._clamp(pace.sim_at(woke), end)
-        if ready:
-            if not self._settle(reached):
+        if ready:  # catch up (a slice at most), then the bytes at the time reached
+            if not self._settle(reached, woke + CATCH_UP_SLICE_S):
                 self._deliver(ready)
         elif target is None:
             self._settle(reached)
         else:
             if lead and woke + lead >= pace.wall_at(target):
                 reached = max(reached, self._clamp(target, end))
-            self._settle(min(target, reached))
+            self._settle(min(target, reached))  # one instant at most
+        self._keep_pace(woke, pace)
 
     def _fast_step(self, target: int | None, end: int | None, busy: bool) -> None:
         wall = self._wall
@@ -523,6 +631,7 @@ class Runner:
                     return
                 self._next_poll = now_wall + self._fast_poll
             ready = self._handle(wall.wait(0))
+            self._meter.sample(wall.monotonic(), self.clock.now)
             if ready:
                 self._next_poll = float("-inf")  # while bytes keep coming: every instant
                 self._deliver(ready)  # arrived while the clock stood at now
@@ -534,10 +643,11 @@ class Runner:
         wake = self._soonest(target)
         timeout = MAX_WAIT_S if wake is None else (wake - self.clock.now) / 1_000_000
         ready = self._handle(wall.wait(min(timeout, MAX_WAIT_S, self._wait_cap())))
-        waited = round((wall.monotonic() - start) * 1_000_000)
-        reached = self._clamp(self.clock.now + waited, end)
+        woke = wall.monotonic()
+        reached = self._clamp(self.clock.now + round((woke - start) * 1_000_000), end)
         if not self._settle(reached) and ready:
             self._deliver(ready)
+        self._meter.sample(woke, self.clock.now)
 
     def _between_polls(self, target: int | None, end: int | None) -> None:
         """Fast mode, no poll due: run instants back to back (each settled as a cycle
@@ -574,10 +684,11 @@ class Runner:
     def _output_queued(self) -> bool:
         return any(transport.pending_output for transport in self._flushers)
 
-    def _settle(self, until: int) -> bool:
-        """Run events up to ``until`` one instant at a time; True if the run is done early."""
+    def _settle(self, until: int, slice_end: float | None = None) -> bool:
+        """Run events up to ``until`` one instant at a time; True if the run is done early.
+        With ``slice_end`` (wall time) it leaves off there, short of ``until``."""
         clock = self.clock
-        if not self._polled and self._predicate is None:
+        if slice_end is None and not self._polled and self._predicate is None:
             clock.run_until(until)
             return self._stopping
         while (deadline := clock.next_deadline()) is not None and deadline <= until:
@@ -585,6 +696,8 @@ class Runner:
             self._pump()
             if self._done():
                 return True
+            if slice_end is not None and self._wall.monotonic() >= slice_end:
+                return False  # the slice is spent: commands, descriptors, stop first
         clock.run_until(until)
         return False
 

@@ -444,26 +444,37 @@ class Plc:
         power reserve ends in a hot restart: SY1 reads 1 during the first master task,
         internal objects are kept and the modules must be reconfigured (AEM 2.5-3,
         DEM 2.5-3 "on a warm restart, when the power reserve has been exhausted")."""
+        power_back = self.cut_power(duration_s)
+        try:
+            self._advance_us(seconds(duration_s))
+        finally:
+            self._powered = True
+        power_back()
+
+    def cut_power(self, duration_s: float) -> Callable[[], None]:
+        """The first half of ``power_break``: the supply cut for a break of ``duration_s``;
+        the second half, the power's return, is the function returned (the control API
+        runs the break as a runner mode between the two, docs/control.md)."""
         if not 0 <= duration_s * S < float("inf"):
             raise ConfigError(f"power break of {duration_s} s not allowed (allowed 0 or more)")
-        duration = seconds(duration_s)
-        long_break = duration > POWER_RESERVE_US
+        long_break = seconds(duration_s) > POWER_RESERVE_US
         present = [e for e in self._slots.values() if e.present]
         if long_break:  # off first: a module sees the exchange it was doing cut
             for entry in present:
                 entry.module.power_off()
         self._end_exchanges(ERR_POWER_BREAK)
         self._powered = False  # no master task, no bus refresh during the break
-        try:
-            self._advance_us(duration)
-        finally:
+
+        def power_back() -> None:
             self._powered = True
-        if long_break:
-            for entry in present:
-                entry.module.power_on()
-        self._read_inputs()
-        if long_break and self.program is not None:  # AEM 2.5-3, DEM 2.5-3: SY1 = 1
-            self.program.hot_restart()
+            if long_break:
+                for entry in present:
+                    entry.module.power_on()
+            self._read_inputs()
+            if long_break and self.program is not None:  # AEM 2.5-3, DEM 2.5-3: SY1 = 1
+                self.program.hot_restart()
+
+        return power_back
 
     def _read_inputs(self) -> None:
         """Power return: the input image is read again from the modules at once, so
