@@ -73,7 +73,8 @@ class Control:
         self.plant = plant
         self.runner = runner
         self.bus = bus
-        # no request reads a file; a console advance through the API ends at a stop (SIGTERM) with the run around it
+        # no request reads a file; a console advance through the API ends at a stop
+        # (SIGTERM) with the run around it
         self.console = Console(plant, files=False, interrupted=lambda: runner.stopping)
         self.mode_ended: Future[Json] | None = None  # the end of the last mode started
         self._exchanges: OrderedDict[int, _Started] = OrderedDict()
