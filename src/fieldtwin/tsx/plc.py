@@ -16,13 +16,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TypeVar
 
+from fieldtwin import hosting
 from fieldtwin.clock import MS, Handle, S, SimClock, seconds
 from fieldtwin.errors import ConfigError
 from fieldtwin.pl7.executor import Executor
 from fieldtwin.pl7.tree import Internal
 from fieldtwin.tsx import registry
 from fieldtwin.tsx.addressing import ObjectKind, ObjectRef, parse_object
-from fieldtwin.tsx.bus import Pacer
+from fieldtwin.tsx.bus import Host, Pacer
 from fieldtwin.tsx.module import BusImage, IntelligentModule, ModuleContext
 from fieldtwin.tsx.plcmemory import (
     CONSTANT_WORDS,
@@ -128,6 +129,7 @@ class Plc:
         clock: SimClock | None = None,
         runner: Pacer | None = None,
         speed: float | None = 1.0,
+        host: Host | None = None,
         event_driven: bool = True,
     ) -> None:
         if model not in MODELS:
@@ -138,6 +140,7 @@ class Plc:
         self.scan_us = round(scan_ms * MS)
         self.clock = clock or SimClock()
         self.runner = runner
+        self.host = host  # None: fieldtwin.hosting's, asked when a real endpoint is wired
         self.speed = speed
         self.running = True
         self._powered = True
@@ -181,7 +184,7 @@ class Plc:
         self._check_slot(rack, slot)
         self._check_limit(cls)
         make: Callable[..., IntelligentModule] = cls
-        ctx = ModuleContext(self.clock, self.model.name, self._enable_pacing)
+        ctx = ModuleContext(self.clock, self.model.name, self._enable_pacing, self._open_line)
         module = make(ctx, rack, slot, declared_code=code, **options)
         self._slots[(rack, slot)] = _Slot(module)
         module.bus_listener = self._bus_changed
@@ -266,10 +269,20 @@ class Plc:
     def _enable_pacing(self) -> Pacer:
         """A module wired a real endpoint: time now follows the wall clock."""
         if self.runner is None:
-            from fieldtwin.runtime.runner import Runner  # the only bridge to the OS
-
-            self.runner = Runner(self.clock, self.speed)
+            self.runner = self._host().pacer(self.clock, self.speed)
         return self.runner
+
+    def _open_line(self, url: str, line: object) -> object:
+        """A module wires a real endpoint: the host opens it, paced by the PLC's pacer."""
+        return self._host().open_line(url, line, self._enable_pacing())
+
+    def _host(self) -> Host:
+        if self.host is None:
+            found = hosting.host()
+            if not isinstance(found, Host):
+                raise ConfigError(f"{found!r} is not a host (pacer, open_line)")
+            self.host = found
+        return self.host
 
     def advance(self, duration_s: float) -> None:
         """Run the simulation for ``duration_s`` simulated seconds."""
