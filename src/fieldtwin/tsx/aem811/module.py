@@ -23,6 +23,7 @@ from fieldtwin.tsx.aem811.config import DEFAULT_CONFIG, ModuleConfig, Rejection
 from fieldtwin.tsx.aem811.inputs import UNITS, ChannelInput, electrical
 from fieldtwin.tsx.aem811.scaling import Measurement, hysteresis, measure
 from fieldtwin.tsx.aem811.sequencer import SLOT_US, Sequencer, Slot
+from fieldtwin.tsx.aem811.status import details
 from fieldtwin.tsx.aem811.thresholds import ThresholdDetector
 from fieldtwin.tsx.module import FaultCategory, IntelligentModule, ModuleContext, ModuleState
 from fieldtwin.tsx.textblock import (
@@ -34,7 +35,6 @@ from fieldtwin.words import set_bit
 
 ACCELERATED_BIT = 8  # OWxy,1,8
 DEFAULT_CONFIG_BIT = 0xD  # IWxy,2,D
-RELAY_LIFE = 300_000_000  # AEM 2.5-2, 8.2: 3 x 10^8 operations
 
 
 class Startup(Protocol):
@@ -369,6 +369,4 @@ class Aem811(IntelligentModule):
             self._startup = startup
 
     def status_details(self) -> dict[str, str]:
-        from fieldtwin.tsx.aem811.status import details
-
         return details(self)
