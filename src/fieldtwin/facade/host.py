@@ -51,7 +51,7 @@ class OsHost:
             assert endpoint.host is not None and endpoint.port is not None
             port.listener = listen(endpoint.host, endpoint.port)
             port.path = listener_url("tcp", port.listener.address)
-            pacer.attach_listener(port.listener, lambda t, now: _connected(port, pacer, t))
+            pacer.attach_listener(port.listener, lambda t, now: _connected(port, t))
         else:
             raise ConfigError(
                 f"endpoint {url!r}: a SCM channel is wired to memory, pty, serial:///DEVICE"
@@ -60,14 +60,14 @@ class OsHost:
         return port
 
 
-def _connected(port: Port, runner: Runner, transport: Transport) -> None:
+def _connected(port: Port, transport: Transport) -> None:
     """A TCP peer connected: it replaces the previous one (one peer per line)."""
     if port.peer is not None:
-        runner.detach(port.peer)
+        port.runner.detach(port.peer)
         port.peer.close()
     port.peer = transport
     port.connections.append(transport.name)
-    runner.attach(transport, port.feed)
+    port.runner.attach(transport, port.feed)
 
 
 HOST = OsHost()

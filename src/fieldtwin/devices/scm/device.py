@@ -75,7 +75,9 @@ class ScmDevice(ModuleDevice):
         for ch, url, where in self.wiring:
             if port.name == f"channel {ch}":
                 try:
-                    self.scm.attach(ch, url)  # ADAPT(SCM): scm/endpoints.open_real via attach
+                    self.scm.attach(
+                        ch, url
+                    )  # ADAPT(SCM): the PLC's host opens it (fieldtwin.facade.host)
                 except ConfigError as exc:
                     raise ConfigError(f"{where}: {exc}") from None
                 return [line for line in self.scm.endpoint_lines() if f"channel {ch} " in line]
