@@ -6,36 +6,14 @@ Every parser here raises ConfigError naming the token and what is allowed
 
 from __future__ import annotations
 
-import math
 import shlex
 from collections.abc import Iterator
 
 from fieldtwin.errors import ConfigError
 from fieldtwin.tsx.addressing import format_object, parse_module, parse_object
 from fieldtwin.tsx.txt import ExchangeResult
+from fieldtwin.units import parse_duration as parse_duration  # the one value language
 from fieldtwin.words import format_hex, parse_word
-
-_UNITS = {"us": 1e-6, "ms": 1e-3, "s": 1.0, "min": 60.0, "h": 3600.0}
-
-
-def parse_duration(token: str) -> float:
-    """'11', '250ms', '2min', '1.5s' -> seconds."""
-    text = token.strip().lower()
-    for unit in sorted(_UNITS, key=len, reverse=True):
-        if text.endswith(unit):
-            number, factor = text[: -len(unit)], _UNITS[unit]
-            break
-    else:
-        number, factor = text, 1.0
-    try:
-        value = float(number) * factor
-    except ValueError:
-        value = math.nan
-    if not math.isfinite(value):
-        raise ConfigError(f"{token!r} is not a duration (e.g. 11, 1.5s, 250ms, 2min)")
-    if value < 0:
-        raise ConfigError(f"{token!r}: a duration cannot be negative")
-    return value
 
 
 def integer(token: str, what: str) -> int:

@@ -16,9 +16,9 @@ from pymodbus.client import ModbusSerialClient, ModbusTcpClient
 from pymodbus.pdu import ExceptionResponse
 
 from fieldtwin.clock import SimClock
+from fieldtwin.facade.tes import build_tes, start_tes_endpoints
 from fieldtwin.modbus.model import Link
 from fieldtwin.runtime.runner import Runner
-from fieldtwin.tes.plant import build_tes, start_tes_endpoints
 
 JOIN_S = 5.0
 

@@ -170,7 +170,8 @@ def test_scm_characters_come_in_blocks() -> None:
 
 
 def test_a_scm_tcp_channel_remembers_a_bounded_number_of_peers() -> None:
-    from fieldtwin.tsx.scm.endpoints import MAX_CONNECTION_NAMES, Port, _connected
+    from fieldtwin.facade.host import _connected
+    from fieldtwin.tsx.scm.endpoints import MAX_CONNECTION_NAMES, Port
 
     class Peer:
         def __init__(self, name: str) -> None:

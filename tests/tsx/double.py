@@ -3,11 +3,9 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from pathlib import Path
 from typing import Any
 
 from fieldtwin.clock import S
-from fieldtwin.errors import ConfigError
 from fieldtwin.tsx import registry
 from fieldtwin.tsx.module import FaultCategory, IntelligentModule, ModuleContext
 from fieldtwin.tsx.textblock import Answer, Exchange
@@ -71,16 +69,9 @@ class Double(IntelligentModule):
             super().inject_fault(name, active)
         self.set_fault(bits[name], active)
 
-    def console_input(self, channel: int, text: str) -> None:
-        if text not in ("0", "1"):
-            raise ConfigError(f"input value {text!r} not allowed (allowed 0 or 1)")
-        self.i_bits = (self.i_bits & ~(1 << channel)) | (int(text) << channel)
-
-    def configure_from_plant(self, table: Mapping[str, Any], where: str, base_dir: Path) -> None:
-        rest = dict(table)
-        for name in rest.pop("faults", []):
-            self.inject_fault(str(name), True)
-        super().configure_from_plant(rest, where, base_dir)
+    def set_input(self, channel: int, level: bool) -> None:
+        """Input ``channel`` (0..15) of the double: the generic face offers it (0 or 1)."""
+        self.i_bits = (self.i_bits & ~(1 << channel)) | (int(level) << channel)
 
 
 registry.register(DOUBLE, Double)

@@ -3,14 +3,16 @@
 A module adapter wraps the module core the PLC built; everything kind-specific
 (its inputs, its plant keys, its ports) is in that kind's own adapter file.
 ``ModuleDevice`` alone is the face of a module class that only the PLC's type
-table knows (tests' doubles): its faults and ``input`` go to the core's own
-``fault_names`` / ``inject_fault`` / ``console_input``.
+table knows: its faults are the core's own ``fault_names`` / ``inject_fault``,
+its inputs the core's typed ``set_input(channel, level)`` if it has one
+(``PointInputs``), and it takes no plant key but ``faults``.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 from functools import partial
+from typing import Protocol, runtime_checkable
 
 from fieldtwin.devices.context import BuildContext
 from fieldtwin.devices.face import (
@@ -31,6 +33,16 @@ from fieldtwin.tsx.addressing import format_object, parse_object
 from fieldtwin.tsx.bus import ModuleState
 from fieldtwin.tsx.module import IntelligentModule
 from fieldtwin.tsx.plc import Plc
+
+POINT_INPUTS = 16  # the on/off inputs a module without a face of its own may offer
+
+
+@runtime_checkable
+class PointInputs(Protocol):
+    """A module core only the PLC knows, with typed on/off inputs ``0``..``15``."""
+
+    def set_input(self, channel: int, level: bool) -> None: ...
+
 
 IDENTITY = (
     Key("type", 'the module type, e.g. "TSX AEM 811"'),
@@ -123,21 +135,23 @@ class ModuleDevice:
         return []
 
     def inputs(self) -> Mapping[str, Input]:
-        return {}
+        """None, unless the core has typed on/off inputs of its own (``PointInputs``)."""
+        m = self.module
+        if not isinstance(m, PointInputs):
+            return {}
+        return {
+            str(ch): Input(str(ch), "0 or 1", partial(self._point, m, ch))
+            for ch in range(POINT_INPUTS)
+        }
+
+    def _point(self, m: PointInputs, channel: int, value: InputValue) -> None:
+        text = value if isinstance(value, str) else str(int(value))
+        if text not in ("0", "1"):
+            raise ConfigError(f"input value {text!r} not allowed (allowed 0 or 1)")
+        m.set_input(channel, text == "1")
 
     def input(self, name: str) -> Input:
-        token = name.strip()
-        if not self.inputs() and token.isdigit():  # a core only the PLC knows
-            return Input(token, "as the module takes it", lambda v: self._console_input(token, v))
-        return pick_input(self, token)
-
-    def _console_input(self, channel: str, value: InputValue) -> None:
-        text = (
-            value
-            if isinstance(value, str)
-            else str(int(value) if isinstance(value, bool) else value)
-        )
-        self.module.console_input(int(channel), text)
+        return pick_input(self, name.strip())
 
     def faults(self) -> Mapping[str, Fault]:
         m = self.module
@@ -158,8 +172,19 @@ class ModuleDevice:
     # --- plant file -----------------------------------------------------------
 
     def configure(self, table: Table, ctx: BuildContext, where: str) -> None:
-        """The kind's own keys (identity keys are gone); legacy cores read them themselves."""
-        self.module.configure_from_plant(dict(table), where, ctx.base_dir)
+        """The kind's own keys (identity keys are gone): a module without a face of its
+        own takes ``faults`` (names set at start) and nothing else."""
+        rest = dict(table)
+        names = rest.pop("faults", [])
+        if not isinstance(names, list):
+            raise ConfigError(f"{where}.faults: {names!r} is not a list of fault names")
+        for name in names:
+            try:
+                self.fault(str(name)).set(True)
+            except ConfigError as exc:
+                raise ConfigError(f"{where}: {exc}") from None
+        if rest:
+            raise ConfigError(f"{where}: unknown keys {sorted(rest)} for {self.kind}")
 
     def bind(self, port: Port, runner: object) -> list[str]:
         raise ConfigError(f"{self.kind} in slot {self.address} has no port {port.name!r}")

@@ -9,10 +9,10 @@ from __future__ import annotations
 from collections.abc import Iterator
 from dataclasses import dataclass
 
+from fieldtwin.objects import DATA_WORDS
 from fieldtwin.pl7 import tree as t
 from fieldtwin.pl7.errors import Pl7Error
 from fieldtwin.pl7.printer import format_object
-from fieldtwin.tsx.txt import DATA_WORDS
 
 
 @dataclass(frozen=True, slots=True)

@@ -17,12 +17,12 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol
 
+from fieldtwin.objects import ObjectRef
 from fieldtwin.pl7 import tree as t
 from fieldtwin.pl7.errors import ProgramFault
 from fieldtwin.pl7.memory import ProgramMemory, Reader
 from fieldtwin.pl7.printer import format_sentence
 from fieldtwin.pl7.types import BIT, WORD, Type, bits, words
-from fieldtwin.tsx.addressing import ObjectRef
 
 NEXT = -1
 RET = -2

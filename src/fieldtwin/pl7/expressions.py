@@ -11,11 +11,11 @@ from collections.abc import Callable
 from typing import NoReturn
 
 from fieldtwin.errors import ConfigError
+from fieldtwin.objects import ObjectKind, parse_object
 from fieldtwin.pl7 import tree as t
 from fieldtwin.pl7.errors import Pl7Error
 from fieldtwin.pl7.tokens import Kind, Token
 from fieldtwin.pl7.types import BIT, WORD, Type, bits, words
-from fieldtwin.tsx.addressing import ObjectKind, parse_object
 from fieldtwin.words import parse_word
 
 _INTERNAL_RE = re.compile(r"^(B|W|CW|SY|SW|X|XM)(\d{1,5})$")

@@ -15,10 +15,10 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Protocol
 
+from fieldtwin.objects import ObjectKind, ObjectRef, parse_object
 from fieldtwin.pl7 import tree as t
 from fieldtwin.pl7.checker import DEFAULT_LIMITS, Limits
 from fieldtwin.pl7.errors import ProgramFault
-from fieldtwin.tsx.addressing import ObjectKind, ObjectRef, parse_object
 
 Reader = Callable[[], int]
 Writer = Callable[[int], None]

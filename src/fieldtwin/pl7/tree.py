@@ -9,7 +9,7 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass, field
 
-from fieldtwin.tsx.addressing import ObjectRef
+from fieldtwin.objects import ObjectRef
 
 
 @dataclass(frozen=True, slots=True)
@@ -55,7 +55,7 @@ class InternalBit:
 
 @dataclass(frozen=True, slots=True)
 class ModuleObj:
-    """``IW5,2,D``, ``OW4,1``, ``I14,0``, ``O16,C``, ``I5,S`` (fieldtwin.tsx.addressing)."""
+    """``IW5,2,D``, ``OW4,1``, ``I14,0``, ``O16,C``, ``I5,S`` (fieldtwin.objects)."""
 
     ref: ObjectRef
 

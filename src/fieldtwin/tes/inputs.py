@@ -3,9 +3,10 @@
 Digital input ``i`` is named ``"i"`` (``"0"`` .. ``"31"``), analog input ``k``
 ``"a<k>"`` (``"a0"`` .. ``"a7"``).  A digital value is a bool (or one of the
 words of ``parse_bool``); an analog value is volts or milliamps within the
-converter's span (§4.2.4: 0..10 V or 0..20 mA give 0..1023 points): a level
-outside it saturates as the converter would (0 or 1023 points) and
-``level_note`` says so (docs/manual-notes.md, TES).
+converter's span (§4.2.4 with §4.3.1: 0..10 V or 0..20 mA give 0..1023 points),
+a :class:`fieldtwin.units.Quantity` or a bare number in the model's unit (volts):
+a level outside the span saturates as the converter would (0 or 1023 points)
+and ``level_note`` says so (docs/manual-notes.md, TES).
 """
 
 from __future__ import annotations
@@ -17,10 +18,12 @@ from dataclasses import dataclass
 from types import MappingProxyType
 
 from fieldtwin.errors import ConfigError
-from fieldtwin.tes.models import TesModel
+from fieldtwin.tes.models import MILLIAMPS, VOLTS, ElectricalRange, TesModel
+from fieldtwin.units import Quantity, parse_quantity
+from fieldtwin.units import parse_bool as _parse_bool
 
-TRUE_WORDS = ("on", "1", "true", "yes")
-FALSE_WORDS = ("off", "0", "false", "no")
+# §4.3.1: the converters span 0..10 V or 0..20 mA; both give the same points.
+SPANS: dict[str, ElectricalRange] = {VOLTS.unit: VOLTS, MILLIAMPS.unit: MILLIAMPS}
 
 
 @dataclass(frozen=True, slots=True)
@@ -74,14 +77,19 @@ def input_ref(model: TesModel, name: str | int) -> InputRef:
 
 def parse_bool(text: str, what: str) -> bool:
     """on/off, 1/0, true/false, yes/no (any case); ConfigError naming the token otherwise."""
-    word = text.strip().lower()
-    if word in TRUE_WORDS:
-        return True
-    if word in FALSE_WORDS:
-        return False
-    raise ConfigError(
-        f"{what}: {text!r} is not on or off (allowed: {', '.join(TRUE_WORDS + FALSE_WORDS)})"
-    )
+    return _parse_bool(text, what)
+
+
+def analog_level(model: TesModel, k: int, value: float | Quantity) -> float:
+    """A level in the model's unit (volts): a bare number as it is, volts or milliamps scaled.
+
+    §4.3.1 gives both spans of a TES converter, 0..10 V and 0..20 mA: ``12mA`` is
+    60 % of the span, as ``6V`` is (docs/manual-notes.md, TES units).
+    """
+    found = parse_quantity(value, tuple(SPANS), f"{model.name} analog input a{k}")
+    if not found.unit or found.unit == model.analog_range.unit:
+        return found.value
+    return found.value / SPANS[found.unit].full_scale * model.analog_range.full_scale
 
 
 def level_note(model: TesModel, k: int, level: float) -> str | None:

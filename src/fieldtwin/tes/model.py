@@ -33,13 +33,21 @@ from fieldtwin.tes.eeprom import checked, mp_image
 from fieldtwin.tes.execute import SlaveAdapter
 from fieldtwin.tes.fallback import MasterWatch
 from fieldtwin.tes.faults import FaultSurface, LineFaults, Param
-from fieldtwin.tes.inputs import InputRef, input_names, input_ref, level_note, parse_bool
+from fieldtwin.tes.inputs import (
+    InputRef,
+    analog_level,
+    input_names,
+    input_ref,
+    level_note,
+    parse_bool,
+)
 from fieldtwin.tes.kinds import Kind
 from fieldtwin.tes.memmap import Register, register_names
 from fieldtwin.tes.models import Family, TesModel, model_named
 from fieldtwin.tes.outputs import DigitalOutputs
 from fieldtwin.tes.params import Value, factory, parse_value
 from fieldtwin.tes.store import ParameterStore
+from fieldtwin.units import Quantity
 
 LED = str  # "on", "off" or "blink"
 _THRESHOLD_KINDS = (
@@ -344,13 +352,14 @@ class Tes:
             return input_ref(self.model, i)
         return input_ref(self.model, f"a{i}" if analog else str(i))
 
-    def set_input(self, i: int | str, value: bool | float | str) -> str | None:
+    def set_input(self, i: int | str, value: bool | float | str | Quantity) -> str | None:
         """Digital input (bool, or an on/off word) or analog input (volts / milliamps).
 
         ``i`` is a name (``"3"``, ``"a2"``) or a number: with a number, a bool
         value means the digital input, a number the analog input.  An analog
-        level beyond the converter's span saturates (§4.2.4): the note saying
-        so is returned (None otherwise).
+        value is a number in volts or a :class:`fieldtwin.units.Quantity` in V
+        or mA (§4.3.1: 0..10 V or 0..20 mA).  A level beyond the converter's
+        span saturates (§4.2.4): the note saying so is returned (None otherwise).
         """
         now = self.clock.now
         ref = self._input(i, not isinstance(value, bool | str))
@@ -358,15 +367,17 @@ class Tes:
             if isinstance(value, str):
                 raise ConfigError(
                     f"{self.model.name} analog input {ref.name}: {value!r} is not a number"
+                    ' (give a number in volts, or Quantity(3, "V") / Quantity(12, "mA"))'
                 )
-            note = level_note(self.model, ref.index, value)
-            self.ai.set_level(ref.index, float(value), now)
+            level = analog_level(self.model, ref.index, value)
+            note = level_note(self.model, ref.index, level)
+            self.ai.set_level(ref.index, level, now)
             return note
         self.di.unfollow(ref.index)
         self.di.set_contact(ref.index, self._on_off(ref, value), now)
         return None
 
-    def _on_off(self, ref: InputRef, value: bool | float | str) -> bool:
+    def _on_off(self, ref: InputRef, value: bool | float | str | Quantity) -> bool:
         if isinstance(value, str):
             return parse_bool(value, f"{self.model.name} input {ref.name}")
         if isinstance(value, bool) or value in (0, 1):

@@ -17,6 +17,7 @@ import termios
 import tty
 
 from fieldtwin.transports.base import READ_CHUNK, FdTransport, LineSettings, line_settings
+from fieldtwin.transports.virtualized import current
 
 
 def _apply_speed(fd: int, baud: int) -> None:
@@ -75,9 +76,9 @@ class PtyTransport(FdTransport):
 
 def open_pty(settings: LineSettings | None = None) -> PtyTransport:
     """A new pty; give ``.peer_path`` to whoever plays the other end."""
-    from fieldtwin.transports.virtual import current  # a replay opens nothing real
-
-    wiring = current()
+    wiring = current()  # a replay opens nothing real
     if wiring is not None:
-        return wiring.pty(settings)
+        found = wiring.pty(settings)
+        assert isinstance(found, PtyTransport)
+        return found
     return PtyTransport(settings)

@@ -16,6 +16,7 @@ import serial as pyserial
 from fieldtwin.charformat import Parity
 from fieldtwin.errors import TransportError
 from fieldtwin.transports.base import READ_CHUNK, FdTransport, LineSettings, line_settings
+from fieldtwin.transports.virtualized import current
 
 _PARITY = {
     Parity.NONE: pyserial.PARITY_NONE,
@@ -98,9 +99,9 @@ def _is_pty(fd: int) -> bool:
 
 def open_serial(device: str, settings: LineSettings | None = None) -> SerialTransport:
     """Open ``device`` (e.g. /dev/ttyUSB0, or a pty's peer_path) with ``settings``."""
-    from fieldtwin.transports.virtual import current  # a replay opens nothing real
-
-    wiring = current()
+    wiring = current()  # a replay opens nothing real
     if wiring is not None:
-        return wiring.serial(device, settings)
+        found = wiring.serial(device, settings)
+        assert isinstance(found, SerialTransport)
+        return found
     return SerialTransport(device, settings or line_settings())

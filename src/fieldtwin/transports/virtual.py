@@ -14,22 +14,22 @@ the wiring's ``sink`` with the transport's key.  The replay runner
 from __future__ import annotations
 
 from collections.abc import Callable
-from contextvars import ContextVar, Token
+from contextvars import Token
 from types import TracebackType
 
 from fieldtwin.transports.base import FdTransport, LineSettings, line_settings
 from fieldtwin.transports.pty import PtyTransport
 from fieldtwin.transports.serial import SerialTransport
 from fieldtwin.transports.tcp import DEFAULT_MAX_CONNECTIONS, TcpListener, TcpTransport
+from fieldtwin.transports.virtualized import CURRENT, VirtualEndpoints
 
 Sink = Callable[[str, bytes], None]  # (transport key, bytes sent)
-
-_CURRENT: ContextVar[Wiring | None] = ContextVar("fieldtwin_virtual_wiring", default=None)
 
 
 def current() -> Wiring | None:
     """The wiring in force (None: open real endpoints)."""
-    return _CURRENT.get()
+    found = CURRENT.get()
+    return found if isinstance(found, Wiring) else None
 
 
 class _Sending(FdTransport):
@@ -109,10 +109,10 @@ class Wiring:
     def __init__(self, sink: Sink | None = None) -> None:
         self.sink = sink
         self._count = 0
-        self._token: Token[Wiring | None] | None = None
+        self._token: Token[VirtualEndpoints | None] | None = None
 
     def __enter__(self) -> Wiring:
-        self._token = _CURRENT.set(self)
+        self._token = CURRENT.set(self)
         return self
 
     def __exit__(
@@ -122,7 +122,7 @@ class Wiring:
         tb: TracebackType | None,
     ) -> None:
         if self._token is not None:
-            _CURRENT.reset(self._token)
+            CURRENT.reset(self._token)
             self._token = None
 
     def _number(self) -> int:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import enum
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Literal, Protocol
+from typing import Any, Literal, Protocol, runtime_checkable
 
 from fieldtwin.clock import SimClock
 
@@ -38,11 +38,21 @@ class BusImage:
 
 
 class Pacer(Protocol):
-    """What paces simulated time to the wall clock (fieldtwin.runtime.runner.Runner)."""
+    """What paces simulated time to the wall clock (a host's, e.g. a Runner)."""
 
     def advance(self, duration: int) -> None: ...
 
     def run_until(self, predicate: Callable[[], bool], limit: int) -> bool: ...
+
+
+@runtime_checkable
+class Host(Protocol):
+    """What a PLC asks of the world outside the cores when a module wires a real endpoint
+    (fieldtwin.hosting; the library's is fieldtwin.facade.host)."""
+
+    def pacer(self, clock: SimClock, speed: float | None) -> Pacer: ...
+
+    def open_line(self, url: str, line: Any, pacer: Pacer) -> Any: ...
 
 
 @dataclass(frozen=True, slots=True)
@@ -51,7 +61,10 @@ class ModuleContext:
 
     clock: SimClock
     plc_model: str = "TSX 87"
-    # Returns the PLC's fieldtwin.runtime.runner.Runner, creating it: call it when the
-    # module wires a real endpoint (pty, serial, TCP), so that simulated time follows
-    # the wall clock, also inside plc.advance and plc.exchange (SCM issue).
+    # Returns the PLC's pacer (its host's, e.g. a fieldtwin.runtime.runner.Runner),
+    # creating it: call it when the module wires a real endpoint (pty, serial, TCP), so
+    # that simulated time follows the wall clock, also inside plc.advance and
+    # plc.exchange (SCM issue).
     pace: Callable[[], Pacer] | None = None
+    # Opens a real endpoint (URL) for a module's line through the PLC's host, paced.
+    open_line: Callable[[str, Any], Any] | None = None

@@ -18,7 +18,6 @@ the SimClock it is given, and the PLC drives the bus by calling
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from pathlib import Path
 from typing import Any, ClassVar
 
 from fieldtwin.clock import Handle as ClockHandle
@@ -292,13 +291,6 @@ class IntelligentModule:
         """Module-specific lines for the console and the live view."""
         return {}
 
-    def set_input(self, channel: int, *args: Any, **kwargs: Any) -> None:
-        raise ConfigError(f"{self.type_name} has no settable inputs")
-
-    def console_input(self, channel: int, text: str) -> None:
-        """``input SLOT CHANNEL VALUE`` in the console (VALUE as typed)."""
-        raise ConfigError(f"{self.type_name} has no settable inputs")
-
     def fault_names(self) -> Mapping[str, str]:
         """Faults the console and plant file can inject: name -> description."""
         return {}
@@ -308,11 +300,6 @@ class IntelligentModule:
             f"unknown fault {name!r} for {self.type_name}"
             f" (allowed: {', '.join(self.fault_names()) or 'none'})"
         )
-
-    def configure_from_plant(self, table: Mapping[str, Any], where: str, base_dir: Path) -> None:
-        """Extra keys of a ``[[module]]`` table (signals, endpoints, faults)."""
-        if table:
-            raise ConfigError(f"{where}: unknown keys {sorted(table)} for {self.type_name}")
 
     # --- run / stop --------------------------------------------------------
 

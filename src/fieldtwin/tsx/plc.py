@@ -12,17 +12,17 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import TypeVar
 
+from fieldtwin import hosting
 from fieldtwin.clock import MS, Handle, S, SimClock, seconds
 from fieldtwin.errors import ConfigError
 from fieldtwin.pl7.executor import Executor
 from fieldtwin.pl7.tree import Internal
 from fieldtwin.tsx import registry
 from fieldtwin.tsx.addressing import ObjectKind, ObjectRef, parse_object
-from fieldtwin.tsx.bus import Pacer
+from fieldtwin.tsx.bus import Host, Pacer
 from fieldtwin.tsx.module import BusImage, IntelligentModule, ModuleContext
 from fieldtwin.tsx.plcmemory import (
     CONSTANT_WORDS,
@@ -34,6 +34,7 @@ from fieldtwin.tsx.plcmemory import (
     calendar_words,
     days_from_civil,
 )
+from fieldtwin.tsx.slots import ABSENT, MODELS, Slot
 from fieldtwin.tsx.textblock import ERR_MODULE_FAULT, ERR_POWER_BREAK
 from fieldtwin.tsx.txt import (
     DATA_WORDS,
@@ -54,67 +55,9 @@ M = TypeVar("M", bound=IntelligentModule)
 ModuleOption = bool | int | float | str  # a module's own constructor option (quantize...)
 
 
-@dataclass(frozen=True, slots=True)
-class PlcModel:
-    name: str
-    register_every: int  # register words refreshed every N cycles (AEM 2.4-3)
-    table_max: int  # Text Block table length in bytes (SCM 4.1: 30 on a 47-20)
-    report_name: str  # TXTi,R on a TSX 47-20, TXTi,V elsewhere (SCM 3.3)
-    racks: int
-    intelligent_slots: int  # slots of a rack that take intelligent modules
-    basic_rack_max: int = 8  # intelligent modules in the basic rack (AEM 6.1-1)
-
-
-MODELS = {
-    "TSX 47-20": PlcModel("TSX 47-20", 2, 30, "R", 1, 4),
-    # AEM 6.1-1: a single-rack basic configuration takes 5 intelligent modules at most
-    "TSX 47-30": PlcModel("TSX 47-30", 1, 254, "V", 8, 8, 5),
-    "TSX 67": PlcModel("TSX 67", 1, 254, "V", 8, 8),
-    "TSX 87": PlcModel("TSX 87", 1, 254, "V", 8, 8),
-}
-
 POWER_RESERVE_US = 10 * MS  # a shorter break does not restart the modules (F-9)
 _W_RE = re.compile(r"^W(\d{1,5})$", re.IGNORECASE)
 _INTERNAL_RE = re.compile(r"^(XM|X|B|CW|SY|SW|W)(\d{1,5})(?:,([0-9A-F]))?$", re.IGNORECASE)
-
-
-ABSENT = BusImage((1 << 8,) + (0,) * 7, 0, True)  # what an empty slot reads
-
-
-class _Slot:
-    """A slot's images.  The program reads and writes them in place (plcmemory cells):
-    ``words`` and ``inputs`` follow ``image`` (IWxy,0..7; Ixy,i and Ixy,S), ``outputs``
-    holds the output bits Oxy,i."""
-
-    __slots__ = ("_image", "inputs", "module", "outputs", "ow", "present", "words")
-
-    def __init__(self, module: IntelligentModule) -> None:
-        self.module = module
-        self.present = True
-        self.ow = [0] * 8
-        self.outputs = [0]  # [Oxy,0..F as a mask]
-        self.words = [0] * 8  # image.iw as a list
-        self.inputs = [0, 1]  # [image.i_bits, image.fault]
-        self._image = BusImage((0,) * 8, 0, True)
-
-    @property
-    def image(self) -> BusImage:
-        return self._image
-
-    @image.setter
-    def image(self, image: BusImage) -> None:
-        self._image = image
-        self.words[:] = image.iw
-        self.inputs[0] = image.i_bits
-        self.inputs[1] = int(image.fault)
-
-    @property
-    def o_bits(self) -> int:
-        return self.outputs[0]
-
-    @o_bits.setter
-    def o_bits(self, value: int) -> None:
-        self.outputs[0] = value
 
 
 class Plc:
@@ -128,6 +71,7 @@ class Plc:
         clock: SimClock | None = None,
         runner: Pacer | None = None,
         speed: float | None = 1.0,
+        host: Host | None = None,
         event_driven: bool = True,
     ) -> None:
         if model not in MODELS:
@@ -138,6 +82,7 @@ class Plc:
         self.scan_us = round(scan_ms * MS)
         self.clock = clock or SimClock()
         self.runner = runner
+        self.host = host  # None: fieldtwin.hosting's, asked when a real endpoint is wired
         self.speed = speed
         self.running = True
         self._powered = True
@@ -153,7 +98,7 @@ class Plc:
         self.program_source = ""
         self.watch = [f"W{i}" for i in range(8)]  # the words the live view shows
         self.calendar_epoch_s: int | None = None  # SW51..SW56 at simulated time 0
-        self._slots: dict[tuple[int, int], _Slot] = {}
+        self._slots: dict[tuple[int, int], Slot] = {}
         # The bus refresh (see _end_of_task): event-driven, a slot is refreshed only
         # after its module's bus face changed (module.bus_dirty) or the PLC's output
         # image may have changed, and a program's idle tasks are skipped (pl7/watch.py);
@@ -181,9 +126,9 @@ class Plc:
         self._check_slot(rack, slot)
         self._check_limit(cls)
         make: Callable[..., IntelligentModule] = cls
-        ctx = ModuleContext(self.clock, self.model.name, self._enable_pacing)
+        ctx = ModuleContext(self.clock, self.model.name, self._enable_pacing, self._open_line)
         module = make(ctx, rack, slot, declared_code=code, **options)
-        self._slots[(rack, slot)] = _Slot(module)
+        self._slots[(rack, slot)] = Slot(module)
         module.bus_listener = self._bus_changed
         self._bus_pending = True
         module.power_on()
@@ -255,7 +200,7 @@ class Plc:
             entry.present = True
             entry.module.power_on()
 
-    def _entry(self, rack: int, slot: int) -> _Slot:
+    def _entry(self, rack: int, slot: int) -> Slot:
         try:
             return self._slots[(rack, slot)]
         except KeyError:
@@ -266,10 +211,20 @@ class Plc:
     def _enable_pacing(self) -> Pacer:
         """A module wired a real endpoint: time now follows the wall clock."""
         if self.runner is None:
-            from fieldtwin.runtime.runner import Runner  # the only bridge to the OS
-
-            self.runner = Runner(self.clock, self.speed)
+            self.runner = self._host().pacer(self.clock, self.speed)
         return self.runner
+
+    def _open_line(self, url: str, line: object) -> object:
+        """A module wires a real endpoint: the host opens it, paced by the PLC's pacer."""
+        return self._host().open_line(url, line, self._enable_pacing())
+
+    def _host(self) -> Host:
+        if self.host is None:
+            found = hosting.host()
+            if not isinstance(found, Host):
+                raise ConfigError(f"{found!r} is not a host (pacer, open_line)")
+            self.host = found
+        return self.host
 
     def advance(self, duration_s: float) -> None:
         """Run the simulation for ``duration_s`` simulated seconds."""
@@ -392,7 +347,7 @@ class Plc:
                 if image.i_bits != i_bits or image.fault != fault:
                     entry.image = BusImage(image.iw, i_bits, fault)
 
-    def _refresh(self, entry: _Slot, registers: bool, now: int) -> None:
+    def _refresh(self, entry: Slot, registers: bool, now: int) -> None:
         """The bus refresh of one slot at every task (``event_driven=False``)."""
         module = entry.module
         if not entry.present:  # AEM 4.4-1: IWxy,0,8 "module absent", Ixy,S
@@ -582,7 +537,7 @@ class Plc:
         self.txt.block(index)  # ConfigError past TXT63
         self.memory.declarations[index] = declaration
 
-    def slot_entry(self, rack: int, slot: int) -> _Slot:
+    def slot_entry(self, rack: int, slot: int) -> Slot:
         """The slot's images (the program's module objects: with a program loaded,
         the outputs are compared with the modules' at every task)."""
         return self._entry(rack, slot)

@@ -17,18 +17,33 @@ declaration ``TxtDeclaration(send=("W", 1130), recv=("W", 1000))``.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from fieldtwin.errors import ConfigError
 from fieldtwin.pl7 import tree as t
 from fieldtwin.pl7.errors import ProgramFault
 from fieldtwin.pl7.memory import BitObject, Cell, IndexedReader, IndexedWriter, Reader, Writer
 from fieldtwin.tsx.addressing import ObjectKind, ObjectRef
-from fieldtwin.tsx.txt import DATA_WORDS, TextBlock, TxtState
+from fieldtwin.tsx.slots import PlcModel, Slot
+from fieldtwin.tsx.txt import DATA_WORDS, TextBlock, TextBlocks, TxtState
 from fieldtwin.words import words_to_bytes
 
-if TYPE_CHECKING:
-    from fieldtwin.tsx.plc import Plc
+
+class Plc(Protocol):
+    """What the program memory reads and writes of the PLC (fieldtwin.tsx.plc.Plc)."""
+
+    model: PlcModel
+    txt: TextBlocks
+    data: list[int]
+    bits: list[int]
+    cw: list[int]
+    sy: list[int]
+    sw: list[int]
+
+    def slot_entry(self, rack: int, slot: int) -> Slot: ...
+
+    def reset_text_block(self, txt: int) -> None: ...
+
 
 SYSTEM_BITS = 128
 SYSTEM_WORDS = 128

@@ -13,9 +13,9 @@ from __future__ import annotations
 import importlib
 import pkgutil
 from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
-import fieldtwin.tsx
 from fieldtwin.errors import ConfigError
 
 _extra: dict[str, Any] = {}
@@ -33,7 +33,7 @@ def _norm(name: str) -> str:
 def _providers() -> list[str]:
     return [
         f"fieldtwin.tsx.{info.name}"
-        for info in pkgutil.iter_modules(fieldtwin.tsx.__path__)
+        for info in pkgutil.iter_modules([str(Path(__file__).parent)])  # fieldtwin.tsx
         if info.ispkg
     ]
 

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 from fieldtwin.clock import S
 from fieldtwin.errors import ConfigError, FieldtwinError
 from fieldtwin.fsm import Machine, Table
+from fieldtwin.objects import DATA_WORDS as DATA_WORDS  # the PL7 name, in the kernel
 from fieldtwin.tsx.bus import ModuleState
 from fieldtwin.tsx.textblock import (
     ERR_CANCELLED,
@@ -35,7 +36,6 @@ from fieldtwin.words import bytes_to_words, format_hex, to_signed, words_to_byte
 if TYPE_CHECKING:
     from fieldtwin.tsx.module import IntelligentModule
 
-DATA_WORDS = 4096  # internal words W0..W4095 (Text Block tables, manual-notes F-12)
 # AEM 3.5-1 configuration screen "NUMBER OF TEXT BLOCKS N/MAX : 4 /64": TXT0..TXT63
 TEXT_BLOCKS = 64
 

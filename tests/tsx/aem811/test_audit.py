@@ -7,6 +7,7 @@ from pathlib import Path
 import pytest
 
 from fieldtwin.clock import MS
+from fieldtwin.devices.aem811.plantkeys import read_plant_table
 from fieldtwin.errors import ConfigError
 from fieldtwin.tsx.aem811.ranges import RANGES
 from fieldtwin.tsx.aem811.scaling import ChannelConfig, Scaling, measure
@@ -208,10 +209,10 @@ def test_plant_channel_mistakes_are_named(
 ) -> None:
     plc, mod = make()
     with pytest.raises(ConfigError, match=match):
-        mod.configure_from_plant({"config": {"channels": [channel]}}, "module[0]", tmp_path)
+        read_plant_table(mod, {"config": {"channels": [channel]}}, "module[0]", tmp_path)
 
 
 def test_plant_unknown_config_key_is_named(tmp_path: Path) -> None:
     plc, mod = make()
     with pytest.raises(ConfigError, match=r"config\.periode"):
-        mod.configure_from_plant({"config": {"periode": 30}}, "module[0]", tmp_path)
+        read_plant_table(mod, {"config": {"periode": 30}}, "module[0]", tmp_path)

@@ -6,6 +6,8 @@ from pathlib import Path
 
 import pytest
 
+from fieldtwin.devices.aem811.plantkeys import read_plant_table
+from fieldtwin.devices.aem811.values import set_value
 from fieldtwin.errors import ConfigError
 from fieldtwin.tsx.aem811.faults import describe
 from tests.tsx.aem811.helpers import CHN, SYS, at, configure, make, ready, run, until, words
@@ -265,14 +267,14 @@ def test_console_inputs_and_faults() -> None:
     plc, mod = ready(quantize=False)
     configure(plc, [0x00C1, 0x80A0])
     run(plc, mod)
-    mod.console_input(0, "2.5V")
-    mod.console_input(1, "12mA")
-    mod.console_input(2, "-750mV")
-    mod.console_input(3, "open")
+    set_value(mod, 0, "2.5V")
+    set_value(mod, 1, "12mA")
+    set_value(mod, 2, "-750mV")
+    set_value(mod, 3, "open")
     plc.advance(1.1)
     assert mod.values[:4] == [2500, 12000, -750, 11000]
     with pytest.raises(ConfigError, match="allowed"):
-        mod.console_input(0, "2.5 volts")
+        set_value(mod, 0, "2.5 volts")
     with pytest.raises(ConfigError, match=r"0\.\.7"):
         mod.set_input(8, volts=1)
     with pytest.raises(ConfigError, match="exactly one"):
@@ -299,7 +301,8 @@ def test_signal_units() -> None:
 
 def test_plant_keys(tmp_path: Path) -> None:
     plc, mod = make(quantize=False)
-    mod.configure_from_plant(
+    read_plant_table(
+        mod,
         {
             "config": {
                 "period": 30,
@@ -325,11 +328,14 @@ def test_plant_keys(tmp_path: Path) -> None:
     plc.advance(3)
     assert mod.values[0] == 5000 and plc.read("I5,0") == 1 and mod.values[4] > 0
     with pytest.raises(ConfigError, match=r"module\[0\].config: the module would refuse"):
-        mod.configure_from_plant(
-            {"config": {"channels": [{"channel": 1, "mode": "H'20A1'"}]}}, "module[0]", tmp_path
+        read_plant_table(
+            mod,
+            {"config": {"channels": [{"channel": 1, "mode": "H'20A1'"}]}},
+            "module[0]",
+            tmp_path,
         )
     with pytest.raises(ConfigError, match="unknown key"):
-        mod.configure_from_plant({"colour": 1}, "module[0]", tmp_path)
+        read_plant_table(mod, {"colour": 1}, "module[0]", tmp_path)
 
 
 def test_4_4_3_footnote_other_word_reads_the_whole_configuration() -> None:

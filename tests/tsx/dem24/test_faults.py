@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pytest
 
+from fieldtwin.devices.dem24.plantkeys import console_value
 from fieldtwin.errors import ConfigError
 from tests.tsx.dem24.helpers import M_SYS, SLOT, configure, make, read_all, synced
 
@@ -104,12 +105,12 @@ def test_7_2_type_1_voltage_thresholds() -> None:
     assert plc48.read(f"IW{SLOT},6,0") == 1
     with pytest.raises(ConfigError):
         mod.set_input(24, True)
-    mod.console_input(3, "18.5V")
-    mod.console_input(4, "on")
+    mod.set_input(3, console_value("18.5V"))
+    mod.set_input(4, console_value("on"))
     plc.advance(0.012)
     assert plc.read(f"IW{SLOT},6") & 0x18 == 0x18
     with pytest.raises(ConfigError):
-        mod.console_input(4, "maybe")
+        mod.set_input(4, console_value("maybe"))
 
 
 def test_2_1_1_filters_reject_short_pulses() -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from fieldtwin.devices.scm import ScmDevice
+from fieldtwin.devices.scm.plantkeys import signal_text
 from fieldtwin.errors import ConfigError
 from fieldtwin.live import mode
 from fieldtwin.tsx.plc import Plc
@@ -66,7 +67,7 @@ def test_5_1_cts_inhibits_transmission_and_cd_reception() -> None:
     tb = plc.start_exchange(m=m(0), c=0x01, send_bytes=b"hi")
     plc.advance(0.2)
     assert peer.receive() == b"" and not tb.done
-    mod.console_input(0, "CTS=0")
+    signal_text(mod, 0, "CTS=0")
     plc.advance(0.02)
     assert tb.done and peer.receive() == b"hi"
     assert plc.read("I7,8") == 0 and plc.read("I7,9") == 0

@@ -9,7 +9,6 @@ A signal given without a unit is read in the unit of the channel's range
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass
 
 from fieldtwin.errors import ConfigError
@@ -54,25 +53,3 @@ def electrical(
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
         raise ConfigError(f"input value {value!r} is not a finite number")
     return ChannelInput("V" if volts is not None else "mA", float(value))
-
-
-_TEXT = re.compile(r"^([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(v|mv|ma|ua|µa)?$", re.I)
-_FACTORS = {"v": ("V", 1.0), "mv": ("V", 1e-3), "ma": ("mA", 1.0), "ua": ("mA", 1e-3)}
-
-
-def parse_input(text: str) -> ChannelInput:
-    """Console text: '2.5V', '2500mV', '12mA', '12000uA', 'open', or a bare number."""
-    token = text.strip()
-    if token.lower() in ("open", "open_circuit", "cut"):
-        return ChannelInput(open=True)
-    match = _TEXT.match(token)
-    if match is None:
-        raise ConfigError(
-            f"input value {text!r} not allowed (allowed e.g. 2.5V, 2500mV, 12mA, 12000uA, open,"
-            " or a number in the unit of the channel's range)"
-        )
-    number, suffix = float(match.group(1)), (match.group(2) or "").lower().replace("µ", "u")
-    if not suffix:
-        return ChannelInput("auto", number)
-    unit, factor = _FACTORS[suffix]
-    return ChannelInput(unit, number * factor)

@@ -12,8 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from pathlib import Path
-from typing import Any, ClassVar, Protocol
+from typing import ClassVar, Protocol
 
 from fieldtwin.clock import Handle, S
 from fieldtwin.errors import ConfigError
@@ -21,9 +20,10 @@ from fieldtwin.signals.base import AnalogSignal
 from fieldtwin.tsx.aem811 import faults as flt
 from fieldtwin.tsx.aem811 import requests
 from fieldtwin.tsx.aem811.config import DEFAULT_CONFIG, ModuleConfig, Rejection
-from fieldtwin.tsx.aem811.inputs import UNITS, ChannelInput, electrical, parse_input
+from fieldtwin.tsx.aem811.inputs import UNITS, ChannelInput, electrical
 from fieldtwin.tsx.aem811.scaling import Measurement, hysteresis, measure
 from fieldtwin.tsx.aem811.sequencer import SLOT_US, Sequencer, Slot
+from fieldtwin.tsx.aem811.status import details
 from fieldtwin.tsx.aem811.thresholds import ThresholdDetector
 from fieldtwin.tsx.module import FaultCategory, IntelligentModule, ModuleContext, ModuleState
 from fieldtwin.tsx.textblock import (
@@ -35,7 +35,6 @@ from fieldtwin.words import set_bit
 
 ACCELERATED_BIT = 8  # OWxy,1,8
 DEFAULT_CONFIG_BIT = 0xD  # IWxy,2,D
-RELAY_LIFE = 300_000_000  # AEM 2.5-2, 8.2: 3 x 10^8 operations
 
 
 class Startup(Protocol):
@@ -140,9 +139,11 @@ class Aem811(IntelligentModule):
             raise ConfigError(f"unit {unit!r} not allowed (allowed: {', '.join(UNITS)})")
         self.inputs[channel] = ChannelInput(unit, 0.0, signal)
 
-    def console_input(self, channel: int, text: str) -> None:
+    def set_level(self, channel: int, value: float) -> None:
+        """A number in the unit of the channel's range (mA on 0/20 and 4/20 mA, V otherwise)."""
         self._check_channel(channel)
-        self.inputs[channel] = parse_input(text)
+        checked = electrical(volts=value)  # a finite number
+        self.inputs[channel] = ChannelInput("auto", checked.value)
 
     @staticmethod
     def _check_channel(channel: int) -> None:
@@ -367,12 +368,5 @@ class Aem811(IntelligentModule):
         else:
             self._startup = startup
 
-    def configure_from_plant(self, table: Mapping[str, Any], where: str, base_dir: Path) -> None:
-        from fieldtwin.tsx.aem811.plant import read_plant_table
-
-        read_plant_table(self, table, where, base_dir)
-
     def status_details(self) -> dict[str, str]:
-        from fieldtwin.tsx.aem811.status import details
-
         return details(self)

@@ -9,16 +9,45 @@ H'0F', H'47', H'49', H'4A' are the base's.  Anything else: H'FD'.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Protocol
 
-from fieldtwin.tsx.aem811.config import Rejection, parse_configuration, read_configuration
+from fieldtwin.tsx.aem811.config import (
+    ModuleConfig,
+    Rejection,
+    parse_configuration,
+    read_configuration,
+)
 from fieldtwin.tsx.aem811.scaling import hysteresis
-from fieldtwin.tsx.aem811.thresholds import THRESHOLD_BYTES
+from fieldtwin.tsx.aem811.thresholds import THRESHOLD_BYTES, ThresholdDetector
 from fieldtwin.tsx.textblock import MODULE_SYSTEM, V_ERROR, V_OK_WRITE, Answer, Exchange
 from fieldtwin.words import words_to_bytes
 
-if TYPE_CHECKING:
-    from fieldtwin.tsx.aem811.module import Aem811
+
+class Aem811(Protocol):
+    """What the requests use of the module (fieldtwin.tsx.aem811.module.Aem811)."""
+
+    config: ModuleConfig
+    default_configuration: bool
+    rejection: Rejection | None
+    thresholds: ThresholdDetector
+
+    @property
+    def enabled(self) -> int: ...
+
+    awaiting_configuration: bool
+    hysteresis_values: list[int]
+    pending_thresholds: Exchange | None
+    snapshot: list[int]
+
+    @property
+    def running(self) -> bool: ...
+
+    def ack_thresholds(self, now: int) -> None: ...
+
+    def refresh_status(self) -> None: ...
+
+    def refresh_words(self) -> None: ...
+
 
 CHANNELS = 0x00  # TXTi,M = H'xy00'
 READ_MEASUREMENTS, WRITE_T0, READ_T0, WRITE_T1, READ_T1 = 1, 2, 3, 4, 5

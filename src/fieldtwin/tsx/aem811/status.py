@@ -2,13 +2,33 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Protocol
 
-from fieldtwin.tsx.aem811.module import RELAY_LIFE
-from fieldtwin.tsx.aem811.scaling import Scaling
+from fieldtwin.tsx.aem811.config import ModuleConfig, Rejection
+from fieldtwin.tsx.aem811.scaling import Measurement, Scaling
+from fieldtwin.tsx.aem811.thresholds import ThresholdDetector
 
-if TYPE_CHECKING:
-    from fieldtwin.tsx.aem811.module import Aem811
+RELAY_LIFE = 300_000_000  # AEM 2.5-2, 8.2: 3 x 10^8 operations
+
+
+class Aem811(Protocol):
+    """What the status lines read of the module (fieldtwin.tsx.aem811.module.Aem811)."""
+
+    config: ModuleConfig
+    default_configuration: bool
+    rejection: Rejection | None
+    thresholds: ThresholdDetector
+
+    @property
+    def enabled(self) -> int: ...
+
+    values: list[int]
+    measurements: list[Measurement | None]
+    relay_operations: list[int]
+
+    @property
+    def accelerated(self) -> bool: ...
+
 
 _SCALING = {Scaling.INPUT_RANGE: "input range", Scaling.STANDARD: "standard", Scaling.USER: "user"}
 

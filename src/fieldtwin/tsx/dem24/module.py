@@ -13,7 +13,6 @@ Block requests live in :mod:`.requests`, the two models in :mod:`.models`.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from pathlib import Path
 from typing import Any, ClassVar
 
 from fieldtwin.clock import Handle
@@ -133,11 +132,8 @@ class Dem24(IntelligentModule):
 
     # --- public API: inputs and pulses ------------------------------------------------
 
-    def set_input(self, channel: int, *args: Any, **kwargs: Any) -> None:
-        """``set_input(channel, value)``: a bool, or volts judged as IEC 61131-2 type 1."""
-        value = args[0] if args else kwargs.get("value")
-        if value is None:
-            raise ConfigError("set_input(channel, value): value missing (a bool or volts)")
+    def set_input(self, channel: int, value: bool | float) -> None:
+        """A bool, or volts judged as IEC 61131-2 type 1 (DEM 6.1)."""
         self.inputs.set_value(check_channel(channel), value, self.clock.now)
 
     def set_signal(self, channel: int, signal: InputSignal | None) -> None:
@@ -291,11 +287,6 @@ class Dem24(IntelligentModule):
 
     # --- the console and plant-file side ------------------------------------------------
 
-    def console_input(self, channel: int, text: str) -> None:
-        from fieldtwin.tsx.dem24.plantkeys import console_value
-
-        self.set_input(channel, console_value(text))
-
     def fault_names(self) -> Mapping[str, str]:
         return FAULTS
 
@@ -310,11 +301,6 @@ class Dem24(IntelligentModule):
             raise ConfigError("fault 'pulses': this module has no pulse source (sync key)")
         else:
             super().inject_fault(name, active)
-
-    def configure_from_plant(self, table: Mapping[str, Any], where: str, base_dir: Path) -> None:
-        from fieldtwin.tsx.dem24.plantkeys import configure
-
-        configure(self, table, where, base_dir)
 
     def status_details(self) -> dict[str, str]:
         tb = self.timebase

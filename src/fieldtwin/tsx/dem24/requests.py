@@ -13,16 +13,41 @@ H'0F', H'47', H'49', H'4A' are the common requests of the base module.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING
+from typing import Protocol
 
-from fieldtwin.tsx.dem24.config import CONFIG_BYTES, FB_TIME_REFUSED, Refusal, check_config
-from fieldtwin.tsx.dem24.stack import MESSAGE_BYTES, READ_MAX
+from fieldtwin.tsx.dem24.config import (
+    CONFIG_BYTES,
+    FB_TIME_REFUSED,
+    Dem24Config,
+    Refusal,
+    check_config,
+)
+from fieldtwin.tsx.dem24.logbook import Logbook
+from fieldtwin.tsx.dem24.stack import MESSAGE_BYTES, READ_MAX, Message
 from fieldtwin.tsx.dem24.timebase import TimeReference
 from fieldtwin.tsx.textblock import MODULE_SYSTEM, V_ERROR, V_OK_WRITE, Answer, Exchange
 from fieldtwin.words import bytes_to_words, words_to_bytes
 
-if TYPE_CHECKING:
-    from fieldtwin.tsx.dem24.module import Dem24
+
+class Dem24(Protocol):
+    """What the requests use of the module (fieldtwin.tsx.dem24.module.Dem24)."""
+
+    config: Dem24Config
+    logbook: Logbook
+
+    @property
+    def running(self) -> bool: ...
+
+    def read_messages(self, count: int) -> list[Message]: ...
+
+    def set_fault(self, bit: int, active: bool) -> None: ...
+
+    def refresh_status(self) -> None: ...
+
+    def refuse_config(self, diag_word: int) -> None: ...
+
+    def apply_config(self, config: Dem24Config, now: int) -> None: ...
+
 
 REQ_READ = 0x01
 REQ_TIME = 0x02

@@ -3,7 +3,7 @@
 The in-memory peer lives in simulated time (its characters arrive at its own
 format and speed, so a peer with another format yields parity and format
 errors).  The real endpoints come from ``fieldtwin.transports`` and are pumped
-by the PLC's runner, which then paces simulated time to the wall clock.
+by the PLC's pacer (fieldtwin.facade.host opens them), which then paces time.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from typing import Any, Protocol
 
 from fieldtwin.charformat import CharFormat, Parity
 from fieldtwin.clock import SimClock
-from fieldtwin.errors import ConfigError, TransportError
+from fieldtwin.errors import TransportError
 from fieldtwin.tsx.scm.line import Line
 
 MAX_CONNECTION_NAMES = 16  # the last TCP peers a channel remembers (DESIGN rule 14)
@@ -151,48 +151,3 @@ class Port:
                 self.runner.detach(item)
             item.close()
         self.peer = self.listener = None
-
-
-def open_real(url: str, line: Line, runner: Any) -> Port:
-    """Open a pty, serial device or TCP listener for ``line`` and attach it to ``runner``."""
-    from fieldtwin.transports import listen, open_pty, open_serial, parse_endpoint
-    from fieldtwin.transports.base import line_settings
-    from fieldtwin.transports.tcp import listener_url
-
-    endpoint = parse_endpoint(url)
-    # parse_endpoint gives a serial URL default settings: only a query fixes them
-    given = endpoint.settings is not None and "?" in url
-    port = Port(url, line, runner=runner, settings_given=given)
-    fmt = line.fmt
-    settings = endpoint.settings if given else None
-    settings = settings or line_settings(fmt.baud, fmt.data_bits, fmt.parity.letter, fmt.stop_bits)
-    if endpoint.scheme == "pty":
-        port.peer = open_pty(settings)
-        port.path = port.peer.peer_path
-        runner.attach(port.peer, port.feed)
-    elif endpoint.scheme == "serial":
-        assert endpoint.device is not None
-        port.peer = open_serial(endpoint.device, settings)
-        port.path = endpoint.device
-        runner.attach(port.peer, port.feed)
-    elif endpoint.scheme == "tcp":
-        assert endpoint.host is not None and endpoint.port is not None
-        port.listener = listen(endpoint.host, endpoint.port)
-        port.path = listener_url("tcp", port.listener.address)
-        runner.attach_listener(port.listener, lambda t, now: _connected(port, t))
-    else:
-        raise ConfigError(
-            f"endpoint {url!r}: a SCM channel is wired to memory, pty, serial:///DEVICE"
-            " or tcp://HOST:PORT (raw characters)"
-        )
-    return port
-
-
-def _connected(port: Port, transport: Any) -> None:
-    """A TCP peer connected: it replaces the previous one (one peer per line)."""
-    if port.peer is not None:
-        port.runner.detach(port.peer)
-        port.peer.close()
-    port.peer = transport
-    port.connections.append(transport.name)
-    port.runner.attach(transport, port.feed)

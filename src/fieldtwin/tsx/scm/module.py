@@ -11,7 +11,6 @@ identification, application name, fault bits.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from pathlib import Path
 from typing import Any, ClassVar
 
 from fieldtwin.charformat import CharFormat
@@ -34,7 +33,6 @@ from fieldtwin.tsx.scm.endpoints import MemoryPeer, Port
 from fieldtwin.tsx.scm.fullduplex import FullDuplexChannel
 from fieldtwin.tsx.scm.halfduplex import HalfDuplexChannel
 from fieldtwin.tsx.scm.line import Line
-from fieldtwin.tsx.scm.plant import configure_module
 from fieldtwin.tsx.scm.variants import CODES_47_20, Adaptor, Family, Variant
 from fieldtwin.tsx.scm.wiring import Wiring
 from fieldtwin.tsx.textblock import (
@@ -156,9 +154,6 @@ class ScmModule(IntelligentModule):
     def set_loop(self, channel: int, loop: str) -> None:
         """How an SCA2 current loop is wired: "point-to-point" or "multipoint" (SCM 5.1 PSR)."""
         self.wiring.set_loop(channel, loop)
-
-    def console_input(self, channel: int, text: str) -> None:
-        self.wiring.console_input(channel, text)
 
     def peer_format(self, channel: int) -> CharFormat:
         return self.wiring.line(channel).fmt
@@ -475,6 +470,3 @@ class ScmModule(IntelligentModule):
             setattr(self.lines[int(ch)], f"inject_{kind}", active)  # kept by the UART
             return
         super().inject_fault(name, active)
-
-    def configure_from_plant(self, table: Mapping[str, Any], where: str, base_dir: Path) -> None:
-        configure_module(self, table, where)

@@ -15,7 +15,7 @@ from fieldtwin.tsx.module import ModuleContext
 from fieldtwin.tsx.scm.adaptors import Signals
 from fieldtwin.tsx.scm.channel import Channel
 from fieldtwin.tsx.scm.config import ChannelConfig
-from fieldtwin.tsx.scm.endpoints import MemoryPeer, Port, open_real
+from fieldtwin.tsx.scm.endpoints import MemoryPeer, Port
 from fieldtwin.tsx.scm.line import Line
 from fieldtwin.tsx.scm.variants import Adaptor
 
@@ -67,9 +67,10 @@ class Wiring:
             line.send_port = port.send
             self.ports[channel] = port
             return peer
-        if ctx.pace is None:
+        if ctx.open_line is None:
             raise ConfigError("a real endpoint needs the module to sit in a Plc (its runner)")
-        port = open_real(endpoint, line, ctx.pace())
+        port = ctx.open_line(endpoint, line)
+        assert isinstance(port, Port)
         line.send_port = port.send
         self.ports[channel] = port
         return port.path or port.url
@@ -122,15 +123,3 @@ class Wiring:
     def _signals_changed(self, channel: int) -> None:
         self.host.channels[channel].signals_changed(self.host.ctx.clock.now)
         self.host.changed()
-
-    def console_input(self, channel: int, text: str) -> None:
-        name, sep, level = text.partition("=")
-        if sep and name.strip().lower() == "loop":
-            self.set_loop(channel, level)
-            return
-        if not sep or level.strip() not in ("0", "1"):
-            raise ConfigError(
-                f"SCM input {text!r}: write SIGNAL=0 or SIGNAL=1 (e.g. CTS=0),"
-                " or loop=point-to-point / loop=multipoint (SCA2)"
-            )
-        self.set_signal(channel, name, int(level))

@@ -19,16 +19,14 @@ the request H'40' would be; a table the module would refuse is an error here.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from fieldtwin.errors import ConfigError
 from fieldtwin.tsx.scm import config as cfgmod
 from fieldtwin.tsx.scm.adaptors import Signals
+from fieldtwin.tsx.scm.module import ScmModule
 from fieldtwin.tsx.scm.variants import Adaptor
 from fieldtwin.words import plant_word, words_to_bytes
-
-if TYPE_CHECKING:
-    from fieldtwin.tsx.scm.module import ScmModule
 
 CHANNEL_KEYS = ("channel", "endpoint", "config", "signals", "loop")
 
@@ -114,4 +112,18 @@ def _config(module: ScmModule, channel: int, value: Any, where: str) -> None:
     module.apply_config(channel, config, module.clock.now)
 
 
-__all__ = ["Adaptor", "configure_module"]
+__all__ = ["Adaptor", "configure_module", "signal_text"]
+
+
+def signal_text(module: ScmModule, channel: int, text: str) -> None:
+    """The channel form of an SCM input: ``CTS=0`` (an adaptor signal) or ``loop=multipoint``."""
+    name, sep, level = text.partition("=")
+    if sep and name.strip().lower() == "loop":
+        module.set_loop(channel, level)
+        return
+    if not sep or level.strip() not in ("0", "1"):
+        raise ConfigError(
+            f"SCM input {text!r}: write SIGNAL=0 or SIGNAL=1 (e.g. CTS=0),"
+            " or loop=point-to-point / loop=multipoint (SCA2)"
+        )
+    module.set_signal(channel, name, int(level))

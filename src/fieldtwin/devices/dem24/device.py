@@ -15,6 +15,7 @@ from pathlib import Path
 
 from fieldtwin.devices.common import apply_faults, apply_inputs
 from fieldtwin.devices.context import BuildContext
+from fieldtwin.devices.dem24.plantkeys import configure, console_value
 from fieldtwin.devices.face import Family, Input, InputValue, SignalSpec
 from fieldtwin.devices.kind import Build, DeviceKind
 from fieldtwin.devices.module import IDENTITY, ModuleDevice, insert_module, own_keys
@@ -23,7 +24,6 @@ from fieldtwin.errors import ConfigError
 from fieldtwin.signals import signal_from_spec
 from fieldtwin.tsx.dem24.inputs import CHANNELS
 from fieldtwin.tsx.dem24.models import Dem24, Dem2412, Dem2413
-from fieldtwin.tsx.dem24.plantkeys import configure, console_value
 from fieldtwin.tsx.plc import Plc
 
 

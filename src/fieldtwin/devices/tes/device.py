@@ -35,6 +35,8 @@ from fieldtwin.devices.face import (
 )
 from fieldtwin.devices.kind import Build, DeviceKind
 from fieldtwin.devices.schema import Key, Schema, Table
+from fieldtwin.devices.tes.plantkeys import KEYS, build_one, check_lines, link_of
+from fieldtwin.devices.tes.values import analog_value, contact_value
 from fieldtwin.errors import ConfigError
 from fieldtwin.modbus.model import Link
 from fieldtwin.signals import analog_from_spec, discrete_from_spec
@@ -42,12 +44,9 @@ from fieldtwin.tes.faults import fault_catalogue
 from fieldtwin.tes.memmap import register_names, register_table
 from fieldtwin.tes.model import Tes
 from fieldtwin.tes.models import MODELS
-from fieldtwin.tes.plant import KEYS, build_one, check_lines, link_of
 from fieldtwin.words import format_hex, parse_word
 
 GROUP = "modbus"  # TES on one endpoint share one line
-_TRUE = ("1", "1.0", "on", "true", "yes")
-_FALSE = ("0", "0.0", "off", "false", "no")
 
 
 class TesRegisters:
@@ -166,21 +165,11 @@ class TesDevice:
         )
 
     def _contact(self, i: int, value: InputValue) -> None:
-        text = str(value).strip().lower()
-        if text not in _TRUE + _FALSE:
-            raise ConfigError(
-                f"{self.kind} input {i}: {value!r} not allowed (allowed 1/0, on/off, true/false)"
-            )
-        self.tes.set_input(i, text in _TRUE)
+        self.tes.set_input(i, contact_value(self.kind, i, value))
 
     def _level(self, k: int, value: InputValue) -> str | None:
-        if isinstance(value, bool):
-            raise ConfigError(f"{self.kind} input a{k}: {value!r} is not a number")
-        try:
-            number = float(value)
-        except ValueError:
-            raise ConfigError(f"{self.kind} input a{k}: {value!r} is not a number") from None
-        return self.tes.set_input(k, number)  # the note of a level beyond the span (§4.2.4)
+        level = analog_value(self.kind, k, value)
+        return self.tes.set_input(k, level)  # the note of a level beyond the span (§4.2.4)
 
     def _drive(
         self, i: int, spec: SignalSpec, where: str, base: Path | None, digital: bool

@@ -17,12 +17,12 @@ from fieldtwin.devices.face import Family, Input, InputValue, Port, PortState
 from fieldtwin.devices.kind import Build, DeviceKind
 from fieldtwin.devices.module import IDENTITY, ModuleDevice, insert_module, own_keys
 from fieldtwin.devices.schema import Key, Schema, Table
+from fieldtwin.devices.scm.plantkeys import Wiring, configure_module, signal_text
 from fieldtwin.errors import ConfigError
 from fieldtwin.tsx.plc import Plc
 from fieldtwin.tsx.scm import MODULE_TYPES
 from fieldtwin.tsx.scm.adaptors import INPUTS
 from fieldtwin.tsx.scm.module import ScmModule
-from fieldtwin.tsx.scm.plant import Wiring, configure_module
 
 GROUP = "scm"  # a channel's own line: raw characters
 
@@ -50,7 +50,7 @@ class ScmDevice(ModuleDevice):
         return super().input(f"{channel}.{signal.upper()}" if dot else channel)
 
     def _text(self, channel: int, value: InputValue) -> None:
-        self.scm.console_input(channel, str(value))
+        signal_text(self.scm, channel, str(value))
 
     def _level(self, channel: int, name: str, value: InputValue) -> None:
         level = {"0": 0, "1": 1, "0.0": 0, "1.0": 1, "false": 0, "true": 1}.get(str(value).lower())
@@ -75,7 +75,9 @@ class ScmDevice(ModuleDevice):
         for ch, url, where in self.wiring:
             if port.name == f"channel {ch}":
                 try:
-                    self.scm.attach(ch, url)  # ADAPT(SCM): scm/endpoints.open_real via attach
+                    self.scm.attach(
+                        ch, url
+                    )  # ADAPT(SCM): the PLC's host opens it (fieldtwin.facade.host)
                 except ConfigError as exc:
                     raise ConfigError(f"{where}: {exc}") from None
                 return [line for line in self.scm.endpoint_lines() if f"channel {ch} " in line]

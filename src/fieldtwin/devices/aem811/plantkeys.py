@@ -11,18 +11,17 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from fieldtwin.errors import ConfigError
 from fieldtwin.signals.spec import analog_from_spec
 from fieldtwin.tsx.aem811.config import DEFAULT_CONFIG, PERIOD_ID, Rejection, parse_configuration
 from fieldtwin.tsx.aem811.inputs import ChannelInput
+from fieldtwin.tsx.aem811.module import Aem811
 from fieldtwin.tsx.aem811.ranges import RANGES, range_by_name
+from fieldtwin.tsx.aem811.requests import write_configuration
 from fieldtwin.tsx.aem811.scaling import ChannelConfig, Scaling
 from fieldtwin.words import parse_word, words_to_bytes
-
-if TYPE_CHECKING:
-    from fieldtwin.tsx.aem811.module import Aem811
 
 CHANNEL_KEYS = ("channel", "mode", "range", "scaling", "sqrt", "continuity", "high", "low")
 KEYS = ("quantize", "inputs", "faults", "config", "config_words", "threshold0", "threshold1")
@@ -41,8 +40,6 @@ class Startup:
     thresholds: tuple[tuple[int, ...] | None, ...]
 
     def apply(self, mod: Aem811) -> None:
-        from fieldtwin.tsx.aem811.requests import write_configuration
-
         if self.config is not None:
             write_configuration(mod, self.config)
         for level, values in enumerate(self.thresholds):

@@ -11,16 +11,16 @@ from collections.abc import Mapping
 from functools import partial
 from pathlib import Path
 
+from fieldtwin.devices.aem811.plantkeys import read_plant_table
+from fieldtwin.devices.aem811.values import set_value
 from fieldtwin.devices.common import apply_faults, apply_inputs
 from fieldtwin.devices.context import BuildContext
 from fieldtwin.devices.face import Family, Input, InputValue, SignalSpec
 from fieldtwin.devices.kind import DeviceKind
 from fieldtwin.devices.module import IDENTITY, ModuleDevice, insert_module, own_keys
 from fieldtwin.devices.schema import Key, Schema, Table
-from fieldtwin.errors import ConfigError
 from fieldtwin.signals.spec import analog_from_spec
 from fieldtwin.tsx.aem811.module import Aem811
-from fieldtwin.tsx.aem811.plant import read_plant_table
 from fieldtwin.tsx.plc import Plc
 
 CHANNELS = range(8)
@@ -43,9 +43,7 @@ class Aem811Device(ModuleDevice):
         }
 
     def _set(self, channel: int, value: InputValue) -> None:
-        if isinstance(value, bool):
-            raise ConfigError(f"input {channel}: {value!r} (allowed e.g. 2.5V, 12mA, open)")
-        self.aem.console_input(channel, value if isinstance(value, str) else repr(value))
+        set_value(self.aem, channel, value)
 
     def _drive(self, channel: int, spec: SignalSpec, where: str, base: Path | None) -> None:
         self.aem.set_signal(channel, analog_from_spec(spec, where=where, base_dir=base))

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from fieldtwin.clock import seconds
 from fieldtwin.errors import ConfigError
@@ -27,25 +27,23 @@ from fieldtwin.signals import signal_from_spec
 from fieldtwin.tsx.dem24.civil import parse_iso
 from fieldtwin.tsx.dem24.config import Refusal, check_config
 from fieldtwin.tsx.dem24.inputs import CHANNELS
+from fieldtwin.tsx.dem24.module import Dem24
 from fieldtwin.tsx.dem24.timebase import TimeReference
+from fieldtwin.units import VOLTS, parse_bool, parse_quantity
 from fieldtwin.words import plant_word
-
-if TYPE_CHECKING:
-    from fieldtwin.tsx.dem24.models import Dem24
 
 KEYS = ("inputs", "sync", "time", "time_indicator", "config", "clock_drift_ppm", "faults")
 
 
 def console_value(text: str) -> bool | float:
     """``1``/``0``/``on``/``off``/``true``/``false``, or volts: ``18.5`` / ``18.5V``."""
-    word = text.strip().lower()
-    if word in ("1", "on", "true"):
-        return True
-    if word in ("0", "off", "false"):
-        return False
     try:
-        return float(word.removesuffix("v"))
-    except ValueError:
+        return parse_bool(text)
+    except ConfigError:
+        pass
+    try:
+        return parse_quantity(text, (VOLTS,)).value
+    except ConfigError:
         raise ConfigError(
             f"input value {text!r} not allowed (allowed 0, 1, on, off, or volts such as 18.5V)"
         ) from None

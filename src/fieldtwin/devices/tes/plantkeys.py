@@ -1,4 +1,4 @@
-"""``[[tes]]`` tables of a plant file -> TES devices, and their Modbus endpoints.
+"""``[[tes]]`` tables of a plant file -> TES cores (their endpoints: fieldtwin.facade.tes).
 
     [[tes]]
     model = "TES 8EA"                      # fixed keys: model, slave, endpoint
@@ -227,30 +227,3 @@ def check_lines(built: list[Tes], tables: Sequence[Mapping[str, Any]], where: st
                 f"{where}: tes[{i}].slave: {key[1]} already answers on {key[0]} (tes[{seen[key]}])"
             )
         seen[key] = i
-
-
-# --- endpoints ---------------------------------------------------------------
-
-
-def start_tes_endpoints(
-    tes_list: Sequence[Tes], tables: Sequence[Mapping[str, Any]], runner: Any
-) -> list[Any]:
-    """Group the TES by endpoint and serve each group (``fieldtwin run`` prints describe())."""
-    from fieldtwin.runtime.tes_lines import serve_group
-
-    groups: dict[str, list[int]] = {}
-    for i, table in enumerate(tables):
-        groups.setdefault(str(endpoint_of(table, f"tes[{i}]")), []).append(i)
-    servers = []
-    try:
-        for url, members in groups.items():
-            # build_tes checked that every TES on one endpoint names the same port
-            link = link_of(tables[members[0]], f"tes[{members[0]}]")
-            servers.append(
-                serve_group(runner, parse_endpoint(url), [tes_list[i] for i in members], link)
-            )
-    except BaseException:
-        for server in servers:
-            server.close()
-        raise
-    return servers

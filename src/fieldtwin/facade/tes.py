@@ -1,0 +1,60 @@
+"""Serve TES on their Modbus endpoints from Python (docs/tes.md, "Plant file").
+
+``start_tes_endpoints(tes_list, tables, runner)`` groups the TES by endpoint and
+serves each group with the runtime's Modbus server glue; ``build_tes`` reads the
+``[[tes]]`` tables.  The older path ``fieldtwin.tes.plant`` still gives both.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from fieldtwin.devices.tes.plantkeys import (
+    KEYS,
+    build_one,
+    build_tes,
+    check_lines,
+    endpoint_of,
+    link_of,
+    wire_timing_of,
+)
+from fieldtwin.endpoint import parse_endpoint
+from fieldtwin.runtime.modbus_server import ModbusServer
+from fieldtwin.runtime.runner import Runner
+from fieldtwin.runtime.tes_lines import serve_group
+from fieldtwin.tes.model import Tes
+
+
+def start_tes_endpoints(
+    tes_list: Sequence[Tes], tables: Sequence[Mapping[str, Any]], runner: Runner
+) -> list[ModbusServer]:
+    """Group the TES by endpoint and serve each group (``fieldtwin run`` prints describe())."""
+    groups: dict[str, list[int]] = {}
+    for i, table in enumerate(tables):
+        groups.setdefault(str(endpoint_of(table, f"tes[{i}]")), []).append(i)
+    servers: list[ModbusServer] = []
+    try:
+        for url, members in groups.items():
+            # build_tes checked that every TES on one endpoint names the same port
+            link = link_of(tables[members[0]], f"tes[{members[0]}]")
+            servers.append(
+                serve_group(runner, parse_endpoint(url), [tes_list[i] for i in members], link)
+            )
+    except BaseException:
+        for server in servers:
+            server.close()
+        raise
+    return servers
+
+
+__all__ = [
+    "KEYS",
+    "build_one",
+    "build_tes",
+    "check_lines",
+    "endpoint_of",
+    "link_of",
+    "start_tes_endpoints",
+    "wire_timing_of",
+]
