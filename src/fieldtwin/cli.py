@@ -10,12 +10,11 @@ import signal
 import sys
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager, suppress
-from pathlib import Path
 from typing import TYPE_CHECKING, TextIO, cast
 
 from fieldtwin import __version__
 from fieldtwin.clock import S, SimClock
-from fieldtwin.errors import FieldtwinError
+from fieldtwin.errors import ConfigError, FieldtwinError
 
 if TYPE_CHECKING:
     from rich.live import Live
@@ -462,17 +461,8 @@ def _console(args: argparse.Namespace) -> int:
     if args.script:
         if args.script == "-":
             return run_script(console, sys.stdin, sys.stdout, sys.stderr, "<stdin>")
-        try:
-            lines = Path(args.script).read_text("utf-8").splitlines()
-        except OSError as exc:
-            print(f"fieldtwin: {args.script}: {exc.strerror}", file=sys.stderr)
-            return 2
-        except UnicodeDecodeError as exc:
-            print(
-                f"fieldtwin: {args.script}: not UTF-8 text (offset {exc.start}; a console"
-                " script is UTF-8)",
-                file=sys.stderr,
-            )
+        lines = _script_lines(args.script)
+        if lines is None:
             return 2
         return run_script(console, lines, sys.stdout, sys.stderr, args.script)
     if not sys.stdin.isatty():
@@ -480,6 +470,21 @@ def _console(args: argparse.Namespace) -> int:
     from fieldtwin.terminal import interactive
 
     return interactive(console, plant)
+
+
+MAX_SCRIPT_BYTES = 16 * 1024 * 1024  # a console script file (docs/console.md)
+
+
+def _script_lines(path: str) -> list[str] | None:
+    """A console script's lines, read with bounds (a regular UTF-8 file); None, said on
+    stderr, when it cannot be read."""
+    from fieldtwin.textfile import read_text
+
+    try:
+        return read_text(path, MAX_SCRIPT_BYTES, "console script").splitlines()
+    except ConfigError as exc:
+        print(f"fieldtwin: {exc}", file=sys.stderr)
+        return None
 
 
 def _attached(args: argparse.Namespace) -> int:
@@ -497,10 +502,8 @@ def _attached(args: argparse.Namespace) -> int:
         if args.commands:
             return run_remote(client, args.commands, sys.stdout, sys.stderr, "-c")
         if args.script and args.script != "-":
-            try:
-                lines = Path(args.script).read_text("utf-8").splitlines()
-            except OSError as exc:
-                print(f"fieldtwin: {args.script}: {exc.strerror}", file=sys.stderr)
+            lines = _script_lines(args.script)
+            if lines is None:
                 return 2
             return run_remote(client, lines, sys.stdout, sys.stderr, args.script)
         if args.script == "-" or not sys.stdin.isatty():

@@ -46,6 +46,7 @@ from fieldtwin.errors import ConfigError
 from fieldtwin.runtime.events import EventBus
 from fieldtwin.runtime.pace import MAX_SPEED, MIN_SPEED
 from fieldtwin.tes.model import Tes
+from fieldtwin.textfile import read_text
 from fieldtwin.tsx.plc import MODELS, Plc
 from fieldtwin.tsx.plcmemory import TxtDeclaration
 from fieldtwin.words import plant_word
@@ -198,20 +199,7 @@ def read_plant(path: str | Path | None) -> PlantFile:
         text = resources.files("fieldtwin").joinpath("plants", DEFAULT_PLANT).read_text("utf-8")
         return _parse(text, DEFAULT_NAME, Path.cwd())
     p = Path(path)
-    try:
-        with p.open("rb") as file:
-            raw = file.read(MAX_PLANT_BYTES + 1)
-    except OSError as exc:
-        raise ConfigError(f"{p}: cannot read the plant file ({exc.strerror})") from None
-    if len(raw) > MAX_PLANT_BYTES:
-        raise ConfigError(f"{p}: larger than {MAX_PLANT_BYTES // 1024 // 1024} MiB (a plant file)")
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise ConfigError(
-            f"{p}: not UTF-8 text (byte {raw[exc.start]:#04x} at offset {exc.start};"
-            " a plant file is UTF-8 TOML)"
-        ) from None
+    text = read_text(p, MAX_PLANT_BYTES, "plant file")  # regular files only: never blocks
     return _parse(text, str(p), p.resolve().parent)
 
 

@@ -99,3 +99,15 @@ def test_run_with_a_duration_ends_with_the_final_status(tmp_path: Path) -> None:
         "slot 5 TSX AEM 811:"
     )
     assert lines[-1] == "stopped at t = 3.000 s"
+
+
+def test_a_console_script_or_plant_that_is_a_fifo_is_refused_without_blocking(
+    tmp_path: Path,
+) -> None:
+    (tmp_path / "plant.toml").write_text(PLC)
+    os.mkfifo(tmp_path / "script.fifo")
+    done = fieldtwin(["console", "plant.toml", "--script", "script.fifo"], tmp_path)
+    _refused(done, "script.fifo", "a FIFO, not a regular file")
+    os.mkfifo(tmp_path / "plant.fifo")
+    done = fieldtwin(["run", "plant.fifo", "--no-live", "--duration", "1"], tmp_path)
+    _refused(done, "plant.fifo", "a FIFO, not a regular file")
