@@ -10,6 +10,7 @@ import signal
 import sys
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager, suppress
+from dataclasses import replace
 from typing import TYPE_CHECKING, TextIO, cast
 
 from fieldtwin import __version__
@@ -415,7 +416,9 @@ def _start_recording(
     from fieldtwin.runtime.record import Recorder
 
     assert plant.source is not None
-    header = recording_header(plant.source, runner.speed)
+    # console lines reach `fieldtwin run` through the control API only, whose console
+    # runs an advance or power break as a runner mode: replayed the same way
+    header = replace(recording_header(plant.source, runner.speed), console="modes")
     recorder = Recorder(args.record, header, plant.clock, plant.devices, plant.events, runner)
     plant.recorder = recorder
     recorders.add([], recorder.close)

@@ -90,11 +90,16 @@ class Console:
         interrupted: Callable[[], bool] = lambda: False,
         progress: Callable[[str], None] | None = None,
         files: bool = True,
+        modes: Callable[[str, int], list[str]] | None = None,
     ) -> None:
         """``interrupted`` is asked between the steps of an ``advance`` (the interactive
         terminal's Ctrl-C); ``progress`` is told when a long one starts.  ``files``
-        False is the control API's console: no command reads a file."""
+        False is the control API's console: no command reads a file.  ``modes`` is a
+        running plant's (the control API's): ``advance`` and ``power break`` start the
+        runner mode ``modes(name, duration_us)`` and answer at once, so that nothing
+        holds the plant's commands while simulated time runs (docs/control.md)."""
         self.plant = plant
+        self.modes = modes
         self.interrupted = interrupted
         self.progress = progress
         self.files = files
@@ -267,6 +272,8 @@ class Console:
         if len(args) != 1:
             raise ConfigError("advance: takes one duration, e.g. advance 11 or advance 250ms")
         left = round(parse_duration(args[0]) * S)
+        if self.modes is not None:
+            return self.modes("advance", left)
         if self.progress is not None and left > ADVANCE_STEP_US:
             self.progress(
                 f"advancing to t = {(self.plant.clock.now + left) / S:.3f} s (Ctrl-C interrupts)"
@@ -343,6 +350,9 @@ class Console:
     def _power(self, args: list[str]) -> list[str]:
         if len(args) != 2 or args[0] != "break":
             raise ConfigError("power: takes 'break SECONDS', e.g. power break 2")
+        if self.modes is not None:
+            self.plc  # noqa: B018 - a plant without a PLC is refused here
+            return self.modes("power break", round(parse_duration(args[1]) * S))
         self.plc.power_break(parse_duration(args[1]))
         return [f"power back  {self._time()}"]
 

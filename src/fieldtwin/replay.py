@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from fieldtwin.clock import MS
+from fieldtwin.console import Console
 from fieldtwin.control.resources import Control
 from fieldtwin.errors import ConfigError, FieldtwinError
 from fieldtwin.plant import Plant, PlantFile, build_plant, embedded_plant, read_plant
@@ -126,7 +127,7 @@ def _play(
             chars = CharsFeed(plant.events, out.append)
             sampler = Sampler(clock, plant.devices, out.append, header.sample_ms * MS)
             control = Control(plant, runner, plant.events)
-            runner.dispatch = _Dispatcher(plant, runner, control)
+            runner.dispatch = _Dispatcher(plant, runner, control, header.console)
             runner.play()
             if end is not None:
                 runner.finish(end[1], end[2])
@@ -140,10 +141,15 @@ def _play(
 class _Dispatcher:
     """Binds, control calls and console lines of a recording, on the replayed plant."""
 
-    def __init__(self, plant: Plant, runner: ReplayRunner, control: Control) -> None:
+    def __init__(
+        self, plant: Plant, runner: ReplayRunner, control: Control, console: str = "inline"
+    ) -> None:
         self.plant = plant
         self.runner = runner
         self.control = control
+        # console lines run as they ran when recorded (the header's console): the
+        # control API's console (modes) or a Python session's (inline)
+        self.console = control.console if console == "modes" else Console(plant, files=False)
 
     def __call__(self, record: Record) -> None:
         kind = record[0]
@@ -159,7 +165,7 @@ class _Dispatcher:
             self._command(name, lambda: getattr(self.control, name)(*args))
         elif kind == "line":
             line = str(record[3])
-            self._command("console", lambda: self.control.console.execute(line))
+            self._command("console", lambda: self.console.execute(line))
 
     def _command(self, label: str, run: Any) -> None:
         try:

@@ -17,6 +17,7 @@ from typing import Any
 import httpx
 import pytest
 
+from fieldtwin.clock import S
 from fieldtwin.control.resources import Control, refuse_files
 from fieldtwin.errors import ConfigError
 from fieldtwin.plant import Plant, load_plant
@@ -88,7 +89,12 @@ def test_prog_load_takes_the_program_text(control: Control) -> None:
     answer = control.console_line("prog load -", PROGRAM)
     assert answer["error"] is None, answer
     assert answer["lines"][0] == "loaded the program text: 1 Literal sections"
-    control.console_line("advance 50ms")
+    started = control.console_line("advance 50ms")  # a runner mode through the API
+    assert started["lines"][0].startswith("advancing to t = "), started
+    ended = control.take_console_mode()
+    assert ended is not None
+    assert control.runner.run_until(ended.done, 10 * S)
+    assert control.console_mode_answer(ended.result())["lines"][0].startswith("t = ")
     assert control.console_line("W20") == {"lines": ["W20 = 30"], "error": None}
     # the text may also follow the line's first newline (how it is recorded)
     assert control.console_line("prog load -\n" + PROGRAM)["error"] is None

@@ -193,3 +193,31 @@ def test_sigterm_at_any_moment_from_the_launch_ends_the_process(tmp_path: Path) 
         gone = list(pool.map(lambda delay: _launch_and_stop(plant, delay), delays))
     late = [d for d, g in zip(delays, gone, strict=True) if g is None]
     assert not late, f"still running {STOP_ANY_S} s after SIGTERM sent at {late}"
+
+
+def test_a_console_advance_through_the_api_holds_nothing(tmp_path: Path) -> None:
+    """`advance` and `power break` sent as console lines are runner modes too: the line
+    is answered at its end (or at wait_s with the mode running on), and pause, speed and
+    reads are served meanwhile."""
+    with _plant(tmp_path) as running:
+        with (
+            Poller(running.modbus_port) as poller,
+            httpx.Client(base_url=running.url, timeout=ANSWER_S) as api,
+        ):
+            answer = api.post("/console", json={"line": "advance 100000", "wait_s": 0.3}).json()
+            assert answer["error"] is None
+            assert answer["lines"][0].startswith("advancing to t = 1000"), answer
+            assert api.get("/clock").json()["mode"] == "advance"
+            assert api.put("/clock/speed", json={"speed": 2}).json()["mode"] == "advance"
+            paused = api.post("/clock/pause", json={}).json()
+            assert paused["mode"] is None and paused["paused"] is True
+            assert len(poller.answers) > 5 and poller.worst_gap <= WORST_GAP_S
+            done = api.post("/console", json={"line": "advance 250ms", "wait_s": 5}).json()
+            assert done == {"lines": [f"t = {paused['t_s'] + 0.25:.3f} s"], "error": None}
+            broke = api.post("/console", json={"line": "power break 3600", "wait_s": 0.3}).json()
+            assert broke["lines"][0].startswith("power off until"), broke
+            assert api.get("/clock").json()["mode"] == "power-break"
+            assert api.post("/clock/pause", json={}).json()["mode"] is None
+            short = api.post("/console", json={"line": "power break 0.1", "wait_s": 5}).json()
+            assert short["lines"][0].startswith("power back  t = "), short
+        _sigterm_ends_it(running)

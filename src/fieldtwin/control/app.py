@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import asyncio
 from collections.abc import Callable, Sequence
+from concurrent.futures import Future
 from typing import Any, TypeVar
 
 from fastapi import FastAPI, Query, Request
@@ -134,7 +135,16 @@ def _plant_routes(app: FastAPI, c: Control, run: Run) -> None:
 
     @app.post("/console", summary="run one console command line on the running plant")
     async def console(body: ConsoleBody) -> Any:
-        return await run(lambda: c.console_line(body.line, body.text), body.wait_s + 1)
+        # an advance or power break starts a runner mode: answered at its end (at most
+        # wait_s), the plant serving every other request meanwhile
+        answer, ended = await run(
+            lambda: (c.console_line(body.line, body.text), c.take_console_mode()),
+            body.wait_s + 1,
+        )
+        if ended is None:
+            return answer
+        result = await _mode_end(c, ended, body.wait_s)
+        return answer if result is None else await run(lambda: c.console_mode_answer(result))
 
 
 def _device_routes(app: FastAPI, c: Control, run: Run) -> None:
@@ -215,18 +225,25 @@ async def _mode(run: Run, c: Control, start: Callable[[], Any], body: ModeBody) 
     state, ended = await run(lambda: (start(), c.mode_ended))
     if not body.wait or ended is None:
         return state
+    result = await _mode_end(c, ended, body.wait_s)
+    if result is not None:
+        return result
+    return await run(c.clock_state)  # still running: the mode as it stands
+
+
+async def _mode_end(c: Control, ended: Future[Any], wait_s: float) -> Any | None:
+    """The end of a mode (its clock state), awaited at most ``wait_s``; None if it
+    has not ended by then or the run stops."""
     done = asyncio.wrap_future(ended)
     loop = asyncio.get_running_loop()
-    deadline = loop.time() + body.wait_s
+    deadline = loop.time() + wait_s
     try:
         while not done.done() and c.runner.running and loop.time() < deadline:
             await asyncio.wait({done}, timeout=min(MODE_POLL_S, deadline - loop.time()))
     finally:
         if not done.done():
             done.cancel()  # the mode's own future runs on (it cannot be cancelled)
-    if done.done():
-        return done.result()
-    return await run(c.clock_state)  # still running: the mode as it stands
+    return done.result() if done.done() and not done.cancelled() else None
 
 
 def _clock_routes(app: FastAPI, c: Control, run: Run) -> None:

@@ -75,8 +75,12 @@ class Control:
         self.bus = bus
         # no request reads a file; a console advance through the API ends at a stop
         # (SIGTERM) with the run around it
-        self.console = Console(plant, files=False, interrupted=lambda: runner.stopping)
+        # a long console command (advance, power break) is a runner mode, as step is
+        self.console = Console(
+            plant, files=False, interrupted=lambda: runner.stopping, modes=self._console_mode
+        )
         self.mode_ended: Future[Json] | None = None  # the end of the last mode started
+        self._console_started: Future[Json] | None = None  # a mode a console line started
         self._exchanges: OrderedDict[int, _Started] = OrderedDict()
         self._next_exchange = 1
 
@@ -345,6 +349,37 @@ class Control:
         return self._clock_event("speed")
 
     # --- the console -------------------------------------------------------------------
+
+    def _console_mode(self, name: str, duration_us: int) -> list[str]:
+        """A console ``advance`` or ``power break``: the runner mode, started now."""
+        if duration_us < 0:
+            raise ConfigError(f"{name}: cannot run simulated time backwards")
+        until = self.plant.clock.now + duration_us
+        if name == "power break":
+            self.power_break(duration_us / S)
+            started = f"power off until t = {until / S:.3f} s"
+        else:
+            self._start("advance", until, "advanced")
+            started = f"advancing to t = {until / S:.3f} s"
+        self._console_started = self.mode_ended
+        return [f"{started} (a mode: pause, speed and reads are served meanwhile)"]
+
+    def take_console_mode(self) -> Future[Json] | None:
+        """The end of the mode the last console line started (once), or None."""
+        started, self._console_started = self._console_started, None
+        return started
+
+    def console_mode_answer(self, ended: Json) -> Json:
+        """A console line's answer once the mode it started has ended, as the
+        stand-alone console answers the same line."""
+        now = f"t = {self.plant.clock.now / S:.3f} s"
+        if ended.get("cut"):
+            first = f"interrupted  {now}"
+        elif ended.get("power") == "back":
+            first = f"power back  {now}"
+        else:
+            first = now
+        return {"lines": [first, *self.console.trace.pending()], "error": None}
 
     def console_line(self, line: str, text: str | None = None) -> Json:
         """One console command line on the running plant: its lines, or its error.

@@ -61,6 +61,10 @@ from fieldtwin.words import parse_word
 
 FORMAT = "fieldtwin-recording"
 VERSION = 1
+# How the recorded console lines ran (docs/record.md): "inline", a Python session's
+# Console (an advance runs there and then); "modes", the control API's console of
+# `fieldtwin run` (an advance or power break starts a runner mode).
+CONSOLES = ("inline", "modes")
 SAMPLE_MS = 100  # objects and LEDs are looked at this often (simulated ms)
 SAMPLE_PRIORITY = 1 << 30  # after every plant event of the same instant
 MAX_OBJECTS = 4096  # objects one device is looked at for
@@ -83,6 +87,7 @@ class Header:
     sample_ms: int
     version: int = VERSION
     fieldtwin: str = __version__
+    console: str = "inline"  # how its console lines ran: one of CONSOLES
 
     def as_json(self) -> dict[str, object]:
         return {
@@ -92,6 +97,7 @@ class Header:
             "plant": {"name": self.plant_name, "text": self.plant_text, "files": dict(self.files)},
             "speed": self.speed,
             "sample_ms": self.sample_ms,
+            "console": self.console,
         }
 
     @classmethod
@@ -117,6 +123,11 @@ class Header:
             or sample < 1
         ):
             raise ConfigError(f"{where}: the header is damaged (plant, speed or sample_ms)")
+        console = data.get("console", "inline")  # recordings before the field: inline
+        if console not in CONSOLES:
+            raise ConfigError(
+                f"{where}: the header's console {console!r} is not one of {', '.join(CONSOLES)}"
+            )
         files = {str(k): str(v) for k, v in plant["files"].items()}
         return cls(
             plant["name"],
@@ -126,6 +137,7 @@ class Header:
             sample,
             version,
             str(data.get("fieldtwin", "?")),
+            str(console),
         )
 
 
