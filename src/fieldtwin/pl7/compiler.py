@@ -196,7 +196,8 @@ _WORD_OPS = {
     t.Op.WXOR: "({a} ^ {b})",
     t.Op.ADD: "(({a} + {b}) & 65535)",
     t.Op.SUB: "(({a} - {b}) & 65535)",
-    t.Op.MUL: "((({a} ^ 32768) - 32768) * (({b} ^ 32768) - 32768) & 65535)",
+    # the product of the signed words, modulo 2**16, is that of the unsigned ones
+    t.Op.MUL: "(({a} * {b}) & 65535)",
     t.Op.DIV: "_div({a}, {b})",
     t.Op.REM: "_rem({a}, {b})",
     t.Op.AND: "({a} & {b})",  # no short cut: every RE/FE keeps its memory
