@@ -46,7 +46,7 @@ class ExpressionParser:
         self.source = source
         self.in_chart = False
         self.nesting = 0  # parentheses, brackets, NOT... open around the token
-        self._depths: dict[int, int] = {}  # id(node) -> its depth (a leaf: 1)
+        self._depths: dict[int, int] = {}  # id(node) -> operators under it (a leaf: 0)
 
     # --- tokens ------------------------------------------------------------------
 
@@ -113,7 +113,7 @@ class ExpressionParser:
     def deeper(self, node: t.Expr, tok: Token, *parts: t.Expr) -> t.Expr:
         """``node`` over ``parts``: one deeper than the deepest of them (refused past
         MAX_DEPTH at ``tok``)."""
-        depth = 1 + max((self._depths.get(id(p), 1) for p in parts), default=1)
+        depth = 1 + max((self._depths.get(id(p), 0) for p in parts), default=0)
         if depth + self.nesting > MAX_DEPTH:
             self.fail(_TOO_DEEP, tok)
         self._depths[id(node)] = depth
