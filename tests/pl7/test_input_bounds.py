@@ -111,3 +111,22 @@ def test_a_program_file_larger_than_the_bound_is_refused(tmp_path: Path) -> None
         load_plant(_plant(tmp_path, "big.pl7"))
     with pytest.raises(ConfigError, match=r"big\.pl7: larger than 1 MiB"):
         Plc(speed=None).load_program(tmp_path / "big.pl7")
+
+
+def test_a_deep_program_through_the_api_console_is_an_error_not_a_500(tmp_path: Path) -> None:
+    from fieldtwin.control.resources import Control
+    from fieldtwin.runtime.runner import Runner
+    from tests.control.plantproc import default_plant_copy
+
+    plant = load_plant(default_plant_copy(tmp_path), speed=None)
+    try:
+        control = Control(plant, Runner(plant.clock, None), plant.events)
+        for text in ("!IF " + "(" * 5000 + "B0" + ")" * 5000 + " THEN SET B1\n",
+                     "!IF " + "NOT " * 100_000 + "B0 THEN SET B1\n"):  # fmt: skip
+            answer = control.console_line("prog load -", text)
+            assert answer["lines"] == [], answer
+            assert str(answer["error"]).startswith("<text>: line 1, column "), answer
+            assert DEEP in str(answer["error"])
+        assert control.plant_json()["plc"] == {"mode": "RUN", "fault": None}
+    finally:
+        plant.close()
