@@ -304,7 +304,9 @@ class Console:
             if args
             else [self.plant.module_device(m.rack, m.slot) for m in plc.modules]
         )
-        lines = [f"PLC {plc.model.name} {'RUN' if plc.running else 'STOP'}  {self._time()}"]
+        lines = [f"PLC {plc.model.name} {plc.mode}  {self._time()}"]
+        if plc.fault is not None:
+            lines.append(f"fault: {plc.fault}")
         for device in modules:
             lines.append("")
             lines.extend(f"{key}: {value}" for key, value in device.status().details)
@@ -378,7 +380,8 @@ class Console:
             raise ConfigError(f"plc: {mode!r} not allowed (allowed: run, stop, cold, hot)")
         actions[mode]()
         done = {"cold": " (cold restart)", "hot": " (hot restart)"}.get(mode, "")
-        return [f"PLC {'RUN' if self.plc.running else 'STOP'}{done}"]
+        fault = [] if self.plc.fault is None else [f"fault: {self.plc.fault}"]
+        return [f"PLC {self.plc.mode}{done}", *fault]
 
     def _tes_status(self) -> list[str]:
         return [tes_line(d) for d in self.plant.tes_devices]

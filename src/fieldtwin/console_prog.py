@@ -130,7 +130,9 @@ def prog_command(
 def state(plc: Plc) -> list[str]:
     executor = plc.program
     assert executor is not None
-    if not plc.running:
+    if plc.fault is not None:
+        mode = f"stopped (PLC in FAULT, {plc.fault})"
+    elif not plc.running:
         mode = "stopped (PLC in STOP)"
     elif executor.held is not None:
         mode = f"held: {executor.held}"

@@ -53,7 +53,7 @@ def _render(plant: Plant, endpoints: list[str], width: int, runner: Runner | Non
     ]
     if plant.plc is not None:
         plc = plant.plc
-        title = f"{plc.model.name} {'RUN' if plc.running else 'STOP'}"
+        title = f"{plc.model.name} {plc.mode}"
         parts.append(_modules(plant, _module_devices(plant), title, width))
         if plc.program is not None:
             parts.append(Text(program_line(plc), "green", overflow="fold"))
@@ -229,7 +229,9 @@ def program_line(plc: Plc) -> str:
     """The program's state: running / held / stopped, the active steps, chosen W words."""
     program = plc.program
     assert program is not None
-    if not plc.running:
+    if plc.fault is not None:
+        state = f"stopped ({plc.fault})"
+    elif not plc.running:
         state = "stopped"
     elif program.held is not None:
         state = f"held ({program.held})"

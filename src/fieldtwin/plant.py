@@ -31,6 +31,7 @@ import re
 import tomllib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from functools import partial
 from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -47,7 +48,7 @@ from fieldtwin.runtime.events import EventBus
 from fieldtwin.runtime.pace import MAX_SPEED, MIN_SPEED
 from fieldtwin.tes.model import Tes
 from fieldtwin.textfile import read_text
-from fieldtwin.tsx.plc import MODELS, Plc
+from fieldtwin.tsx.plc import MAX_PROGRAM_BYTES, MODELS, WATCHDOG_MS, WATCHDOG_RANGE_MS, Plc
 from fieldtwin.tsx.plcmemory import TxtDeclaration
 from fieldtwin.words import plant_word
 
@@ -326,7 +327,16 @@ def build_plant(
         _program(plc, program_keys, plant_file)
     plant = Plant(name, title, clock, plc, list(ctx.devices), speed=pace, notes=list(ctx.notes))
     plant.source = plant_file
+    if plc is not None:  # the watchdog's trip on the event stream (docs/control.md)
+        plc.on_fault = partial(_publish_fault, plant.events)
     return plant
+
+
+KIND_PLC = "plc"  # the event of the PLC going to its fault state
+
+
+def _publish_fault(events: EventBus, now: int, reason: str) -> None:
+    events.publish(now, KIND_PLC, "plc", {"mode": "FAULT", "fault": reason})
 
 
 def _array(data: Mapping[str, object], key: str, name: str) -> list[object]:
@@ -432,15 +442,32 @@ def _build_plc(
         or not 1 <= scan_ms <= 1000
     ):
         raise ConfigError(f"{name}: plc.scan_ms: {scan_ms!r} not allowed (allowed 1..1000 ms)")
+    watchdog_ms = plc_table.pop("watchdog_ms", WATCHDOG_MS)
+    low, high = WATCHDOG_RANGE_MS
+    if (
+        isinstance(watchdog_ms, bool)
+        or not isinstance(watchdog_ms, int | float)
+        or not low <= watchdog_ms <= high
+    ):
+        raise ConfigError(
+            f"{name}: plc.watchdog_ms: {watchdog_ms!r} not allowed (allowed {low}..{high} ms)"
+        )
     outputs = plc_table.pop("outputs", {})
     keys = {k: plc_table.pop(k) for k in PROGRAM_KEYS if k in plc_table}
     if plc_table:
         raise ConfigError(
             f"{name}: plc: unknown key(s) {', '.join(sorted(plc_table))}"
-            " (allowed: model, scan_ms, outputs)"
+            " (allowed: model, scan_ms, outputs), watchdog_ms"
             f" and, for a program, {', '.join(PROGRAM_KEYS)}"
         )
-    plc = Plc(model=model, scan_ms=scan_ms, clock=clock, runner=runner, speed=speed)
+    plc = Plc(
+        model=model,
+        scan_ms=scan_ms,
+        clock=clock,
+        runner=runner,
+        speed=speed,
+        watchdog_ms=watchdog_ms,
+    )
     return plc, outputs, keys
 
 
@@ -503,13 +530,14 @@ def _program_keys(plc: Plc, keys: Mapping[str, object], plant_file: PlantFile) -
     embedded = resources.files("fieldtwin").joinpath("plants", Path(program).name)
     try:
         if plant_file.name != DEFAULT_NAME and path.exists():
-            text = path.read_text(encoding="utf-8")
+            # a regular file of at most 1 MiB of UTF-8: never a FIFO or /dev/zero
+            text = read_text(path, MAX_PROGRAM_BYTES, "PL7 program")
         elif program.endswith(".pl7") and embedded.is_file():  # fieldtwin's own programs
             text, path = embedded.read_text("utf-8"), Path(program)
         else:
-            text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ConfigError(f"{where}.program: {path}: cannot read ({exc.strerror})") from None
+            text = read_text(path, MAX_PROGRAM_BYTES, "PL7 program")
+    except ConfigError as exc:
+        raise ConfigError(f"{where}.program: {exc}") from None
     except ValueError:  # a NUL in the name
         raise ConfigError(f"{where}.program: {program!r} is not a file name") from None
     try:

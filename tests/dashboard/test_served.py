@@ -46,7 +46,7 @@ def test_the_page_its_files_and_the_state_come_from_the_plant(plant: Running) ->
     assert [m["id"] for m in state["modules"]] == ["4", "5", "7", "14", "16", "17"]
     assert [t["id"] for t in state["tes"]] == ["tes1", "tes2"]
     assert state["plc"] == {
-        "model": "TSX 87", "running": True, "mode": "RUN", "scan_ms": 10.0,
+        "model": "TSX 87", "running": True, "mode": "RUN", "fault": None, "scan_ms": 10.0,
         "program": state["plc"]["program"],
     }  # fmt: skip
     dst = next(m for m in state["modules"] if m["id"] == "16")

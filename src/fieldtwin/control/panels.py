@@ -59,7 +59,8 @@ def plc_panel(plc: Plc) -> Json:
     return {
         "model": plc.model.name,
         "running": plc.running,
-        "mode": "RUN" if plc.running else "STOP",
+        "mode": plc.mode,  # RUN, STOP or FAULT (the watchdog: "fault" says why)
+        "fault": plc.fault,
         "scan_ms": plc.scan_us / 1000,
         "program": None if program is None else {"cycles": program.cycles},
     }

@@ -98,10 +98,13 @@ class Control:
         return device
 
     def plant_json(self) -> Json:
+        plc = self.plant.plc
         return {
             "title": self.plant.title,
             "name": self.plant.name,
             "clock": self.clock_json(),
+            # RUN, STOP or FAULT, and why (the task watchdog: docs/pl7.md)
+            "plc": None if plc is None else {"mode": plc.mode, "fault": plc.fault},
             "devices": [
                 {
                     "id": ident,

@@ -7,6 +7,13 @@ other object through the reader or writer the memory gives.  A sentence function
 returns a control code: NEXT, RET or the index of the sentence a JUMP goes to.
 The tree is never walked again while the program runs.
 
+The task watchdog's budget (docs/pl7.md, "The task watchdog"): each chunk has a
+cost in operations (one per object read or written, operator, comparison and
+instruction of its sentences, both branches of an IF counted), spent by the
+executor before it runs the chunk; a WHILE spends its body's cost at each pass
+after the first.  Past the budget the code raises WatchdogOverrun, which no
+sentence catches: the task is cut there.
+
 Values: 0/1 for bits, 0..65535 for words (arithmetic on signed 16-bit words,
 wrapping), a mask for bit strings (bit 0 first), a list for word tables.
 """
@@ -19,7 +26,7 @@ from typing import Any, Protocol
 
 from fieldtwin.objects import ObjectRef
 from fieldtwin.pl7 import tree as t
-from fieldtwin.pl7.errors import ProgramFault
+from fieldtwin.pl7.errors import ProgramFault, WatchdogOverrun
 from fieldtwin.pl7.memory import ProgramMemory, Reader
 from fieldtwin.pl7.printer import format_sentence
 from fieldtwin.pl7.types import BIT, WORD, Type, bits, words
@@ -35,6 +42,11 @@ class Runtime(Protocol):
     """What compiled code needs from the executor."""
 
     edges: list[int]
+
+    @property
+    def budget_cell(self) -> list[int]:
+        """[operations left in the master task running] (the watchdog's budget)."""
+        ...
 
     def step_cells(self, obj: t.Internal) -> tuple[list[int], tuple[int, ...]]: ...
 
@@ -61,6 +73,7 @@ class Module:
     code: tuple[Code, ...]
     lines: tuple[int, ...]  # the line of each chunk's first sentence
     labels: tuple[int, ...]  # every label of the body
+    costs: tuple[int, ...] = ()  # each chunk's operations (the watchdog's budget)
 
 
 def compile_body(
@@ -74,17 +87,24 @@ def compile_body(
             chunks.append([])
         chunks[-1].append(sentence)
     targets = {c[0].label: k for k, c in enumerate(chunks) if c[0].label is not None}
-    gen = _Generator(memory, rt, targets)
+    gen = _Generator(memory, rt, targets, name)
     hooks = (
         gen.bind(lambda line, err: rt.fault(name, line, err)),
         gen.bind(rt.watch(name)),
         gen.bind(lambda label: rt.hit(name, label)),
     )
+    code: list[Code] = []
+    costs: list[int] = []
+    for c in chunks:
+        gen.ops = 0
+        code.append(gen.chunk(c, hooks))
+        costs.append(max(1, gen.ops))
     return Module(
         name,
-        tuple(gen.chunk(c, hooks) for c in chunks),
+        tuple(code),
         tuple(c[0].pos.line for c in chunks),
         tuple(s.label for s in sentences if s.label is not None),
+        tuple(costs),
     )
 
 
@@ -102,7 +122,7 @@ def _jumps(body: tuple[t.Statement, ...]) -> list[t.Jump]:
 
 
 def compile_condition(node: t.Expr, memory: ProgramMemory, rt: Runtime) -> Reader:
-    gen = _Generator(memory, rt, {})
+    gen = _Generator(memory, rt, {}, "condition")
     code = gen.function(["return " + gen.expr(node)], "condition")
     return code
 
@@ -168,6 +188,7 @@ _BASE: dict[str, Any] = {
     "_while_fault": _while_fault,
     "MAX_WHILE": MAX_WHILE,
     "_PF": ProgramFault,
+    "_WD": WatchdogOverrun,
 }
 _WORD_OPS = {
     t.Op.WAND: "({a} & {b})",
@@ -175,7 +196,8 @@ _WORD_OPS = {
     t.Op.WXOR: "({a} ^ {b})",
     t.Op.ADD: "(({a} + {b}) & 65535)",
     t.Op.SUB: "(({a} - {b}) & 65535)",
-    t.Op.MUL: "((({a} ^ 32768) - 32768) * (({b} ^ 32768) - 32768) & 65535)",
+    # the product of the signed words, modulo 2**16, is that of the unsigned ones
+    t.Op.MUL: "(({a} * {b}) & 65535)",
     t.Op.DIV: "_div({a}, {b})",
     t.Op.REM: "_rem({a}, {b})",
     t.Op.AND: "({a} & {b})",  # no short cut: every RE/FE keeps its memory
@@ -193,13 +215,18 @@ _COMPARE = {
 
 
 class _Generator:
-    def __init__(self, memory: ProgramMemory, rt: Runtime, labels: dict[int, int]) -> None:
+    def __init__(
+        self, memory: ProgramMemory, rt: Runtime, labels: dict[int, int], module: str
+    ) -> None:
         self.m = memory
         self.rt = rt
         self.labels = labels
+        self.module = module
         self.env: dict[str, Any] = dict(_BASE)
         self.names: dict[int, str] = {}
         self.temps = 0
+        self.ops = 0  # operations of the code generated so far (the watchdog's cost)
+        self.line = 0  # the line of the sentence being compiled
 
     def bind(self, value: object) -> str:
         name = self.names.get(id(value))
@@ -226,6 +253,7 @@ class _Generator:
         fault, watch, hit = hooks
         lines: list[str] = []
         for sentence in sentences:
+            self.line = sentence.pos.line
             if sentence.label is not None:
                 lines += [f"if {watch} and {sentence.label} in {watch}:"]
                 lines += [f"    {hit}({sentence.label})"]
@@ -238,6 +266,7 @@ class _Generator:
         return self.function(lines, format_sentence(sentences[0])[:60])
 
     def statement(self, node: t.Statement) -> list[str]:
+        self.ops += 1
         if isinstance(node, t.If):
             out = [f"if {self.expr(node.condition)}:"]
             out += _indent(self.actions(node.then))
@@ -246,9 +275,16 @@ class _Generator:
             return out
         if isinstance(node, t.While):
             count = self.temp()
+            before = self.ops
+            condition = self.expr(node.condition)
+            actions = self.actions(node.body)
+            # each pass after the first spends the body's cost (the first is the chunk's)
+            budget, cost = self.bind(self.rt.budget_cell), self.ops - before + 1
             body = [f"{count} += 1", f"if {count} > MAX_WHILE:", "    raise _while_fault()"]
-            body += self.actions(node.body)
-            return [f"{count} = 0", f"while {self.expr(node.condition)}:", *_indent(body)]
+            body += [f"if {count} > 1:", f"    {budget}[0] -= {cost}"]
+            body += [f"    if {budget}[0] < 0:", f"        raise _WD({self.module!r}, {self.line})"]
+            body += actions
+            return [f"{count} = 0", f"while {condition}:", *_indent(body)]
         return self.action(node)
 
     def actions(self, actions: tuple[t.Action, ...]) -> list[str]:
@@ -258,6 +294,7 @@ class _Generator:
         return out
 
     def action(self, node: t.Action) -> list[str]:
+        self.ops += 1
         if isinstance(node, t.Assign):
             value = self.temp()
             out = [f"{value} = {self.expr(node.source)}"]
@@ -284,6 +321,7 @@ class _Generator:
 
     def store(self, target: t.Expr, value: str, source: Type) -> list[str]:
         """Lines that store ``value`` (of type ``source``) into ``target``."""
+        self.ops += 1
         if isinstance(target, t.Table):
             return self.store_table(target, value, source)
         if isinstance(target, t.Indexed):
@@ -319,6 +357,7 @@ class _Generator:
     # --- expressions --------------------------------------------------------------------
 
     def expr(self, node: t.Expr) -> str:
+        self.ops += 1
         if isinstance(node, t.Const):
             return str(node.value)
         if isinstance(node, t.Internal) and node.kind in ("X", "XM"):

@@ -28,3 +28,13 @@ class Pl7Error(ConfigError):
 
 class ProgramFault(FieldtwinError):
     """A run-time error of the program (caught by the executor, never raised out of it)."""
+
+
+class WatchdogOverrun(FieldtwinError):
+    """The master task ran past its budget (the task watchdog): raised by the compiled
+    code at a loop or a section, caught by the executor, which cuts the task there."""
+
+    def __init__(self, module: str, line: int) -> None:
+        super().__init__(f"{module} line {line}")
+        self.module = module
+        self.line = line

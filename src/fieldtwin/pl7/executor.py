@@ -12,6 +12,13 @@
   zero, a loop past its bound) abandons the sentence in which it happens, sets
   SY18 (FAULT_BIT, docs/manual-notes.md) and is recorded in ``faults``; the task
   goes on with the next sentence.  Nothing is ever raised out of a cycle.
+- The task watchdog (docs/pl7.md, docs/manual-notes.md W-1): each master task has a
+  budget of ``budget`` operations (the watchdog period at the documented rate of
+  OPS_PER_MS operations a millisecond), spent chunk by chunk and at each WHILE pass;
+  a task past it is cut where it is, SY11 (WATCHDOG_BIT) is set and ``overrun`` says
+  where; no further task runs until a cold or a hot restart.  The loops' own bounds
+  (backward JUMPs, WHILE passes, CALL depth) stay program faults; the budget bounds
+  what they multiply to.
 - Debugging: a breakpoint at a label or a step holds the executor at the end of
   the master task that reached it; ``step()`` runs one master task, ``resume()``
   lets it run again.
@@ -29,7 +36,7 @@ from dataclasses import dataclass
 from fieldtwin.pl7 import tree as t
 from fieldtwin.pl7.checker import DEFAULT_LIMITS, Limits, check
 from fieldtwin.pl7.compiler import NEXT, RET, Module, compile_body, compile_condition
-from fieldtwin.pl7.errors import Pl7Error, ProgramFault
+from fieldtwin.pl7.errors import Pl7Error, ProgramFault, WatchdogOverrun
 from fieldtwin.pl7.grafcet import ChartLayout, Grafcet
 from fieldtwin.pl7.memory import ProgramMemory
 from fieldtwin.pl7.parser import parse
@@ -38,7 +45,11 @@ from fieldtwin.pl7.watch import Snapshot, WatchedMemory
 COLD_RESTART_BIT = 0  # SY0 (AEM 5.1)
 HOT_RESTART_BIT = 1  # SY1 (AEM 2.5-2)
 MINUTE_BIT = 7  # SY7 "Minutes" system bit (DEM 5.3-1)
+WATCHDOG_BIT = 11  # SY11: the master task overran its watchdog (docs/manual-notes.md W-1)
 FAULT_BIT = 18  # SY18: a run-time program fault (our reading, docs/manual-notes.md)
+WATCHDOG_MS = 150  # the master task's watchdog period (our reading, manual-notes W-1)
+OPS_PER_MS = 1000  # operations a TSX 7 processor runs in a millisecond (W-1)
+DEFAULT_BUDGET = WATCHDOG_MS * OPS_PER_MS  # operations of one master task
 MINUTE_US = 60_000_000
 MAX_JUMPS = 10_000  # backward JUMPs in one run of a module before a fault
 MAX_CALL_DEPTH = 8  # nested CALLs before a fault
@@ -56,6 +67,11 @@ class FaultRecord:
 
     def __str__(self) -> str:
         return f"{self.module} line {self.line} (task {self.cycle}): {self.message}"
+
+
+def budget_of(watchdog_ms: float) -> int:
+    """The operations of a master task whose watchdog period is ``watchdog_ms``."""
+    return max(1, round(watchdog_ms * OPS_PER_MS))
 
 
 @dataclass(frozen=True, slots=True)
@@ -88,12 +104,15 @@ class Executor:
         self.held: Hit | None = None
         self.hits: list[Hit] = []
         self._depth = 0
+        self.budget = DEFAULT_BUDGET  # operations a master task may run (the watchdog)
+        self._budget = [0]  # operations left in the task running (the compiled code's)
+        self.overrun: FaultRecord | None = None  # the watchdog tripped: where, which task
         self._label_breaks: dict[str, set[int]] = {}
         self._step_breaks: set[int] = set()
         self._restart_bit: int | None = None
         self._sy = {
             bit: memory.bit_writer(t.Internal("SY", bit))
-            for bit in (COLD_RESTART_BIT, HOT_RESTART_BIT, MINUTE_BIT, FAULT_BIT)
+            for bit in (COLD_RESTART_BIT, HOT_RESTART_BIT, MINUTE_BIT, WATCHDOG_BIT, FAULT_BIT)
         }
         self._minute = self._sy[MINUTE_BIT]
         self.grafcet: Grafcet | None = None
@@ -132,6 +151,10 @@ class Executor:
             if source and not err.source:
                 raise Pl7Error(err.line, err.column, err.token, err.expected, source) from None
             raise
+
+    @property
+    def budget_cell(self) -> list[int]:
+        return self._budget
 
     def _effect(self) -> None:
         self._effects += 1
@@ -178,9 +201,13 @@ class Executor:
             self._depth -= 1
 
     def run_module(self, module: Module) -> None:
-        code, n = module.code, len(module.code)
+        code, costs, n = module.code, module.costs, len(module.code)
+        budget = self._budget
         i = jumps = 0
         while i < n:
+            budget[0] -= costs[i]
+            if budget[0] < 0:
+                raise WatchdogOverrun(module.name, module.lines[i])
             r = code[i]()  # faults are caught, sentence by sentence, inside the chunk
             if r == NEXT:
                 i += 1
@@ -217,23 +244,29 @@ class Executor:
             self.grafcet.reset()
         self.faults.clear()
         self._sy[FAULT_BIT](0)
+        self._sy[WATCHDOG_BIT](0)
+        self.overrun = None
         self._restart_bit = COLD_RESTART_BIT
         self._fixed = None
 
     def hot_restart(self) -> None:
-        """Everything kept; SY1 reads 1 during the next master task."""
+        """Everything kept (SY11 too, after a watchdog); SY1 reads 1 during the next task."""
+        self.overrun = None
         self._restart_bit = HOT_RESTART_BIT
         self._fixed = None
 
     def run_master_task(self, now_us: int | None = None) -> bool:
-        """One master task (PRE, CHART, POST) unless a breakpoint holds the executor."""
-        if self.held is not None:
+        """One master task (PRE, CHART, POST) unless a breakpoint holds the executor
+        or the watchdog tripped (until a cold or a hot restart)."""
+        if self.held is not None or self.overrun is not None:
             return False
         self._task(now_us)
         return True
 
     def step(self, now_us: int | None = None) -> None:
         """Debugging: one master task, then hold again."""
+        if self.overrun is not None:
+            return
         self.held = None
         self._task(now_us)
         if self.held is None:
@@ -276,6 +309,16 @@ class Executor:
         return bool(self._step_breaks) or any(self._label_breaks.values())
 
     def _sections(self) -> None:
+        self._budget[0] = self.budget
+        try:
+            self._run_sections()
+        except WatchdogOverrun as over:  # the task is cut where it is
+            self._effects += 1
+            message = f"master task exceeded {self.budget} operations (the watchdog)"
+            self.overrun = FaultRecord(over.module, over.line, self.cycles, message)
+            self._sy[WATCHDOG_BIT](1)
+
+    def _run_sections(self) -> None:
         pre = self.modules.get("PRE")
         if pre is not None:
             self.run_module(pre)

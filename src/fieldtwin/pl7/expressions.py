@@ -2,6 +2,13 @@
 between bits and an addition between words); the token helpers the parser uses.
 
 Every refusal is a Pl7Error with line, column, token and what was expected.
+
+Depth is bounded (MAX_DEPTH): an expression nests at most that deep, counting each
+parenthesis, bracket, NOT, RE/FE, SHL/SHR, BTA and index, and each operator over its
+operands (a chain ``B0+B1+...`` is as deep as it is long).  The parser refuses
+deeper text at the token that goes past the bound, before it recurses further, so
+no program text ends in a RecursionError, and the compiled code stays within what
+Python compiles (docs/pl7.md, "Bounds").
 """
 
 from __future__ import annotations
@@ -26,6 +33,8 @@ _TEXT_TARGET = "an object to write (Bi, Wi, SYi, SWi, OWxy,i[,j], Oxy,i, TXTi,M/
 _OBJECTS = "an object (Bi Wi CWi SYi SWi Xi IWxy,i[,j] OWxy,i[,j] Ixy,i Oxy,i Ixy,S TXTi,F)"
 MAX_TABLE = 4096  # a table's length in the source (the internal words, tsx.txt.DATA_WORDS)
 MAX_SHIFT = 16
+MAX_DEPTH = 64  # how deep an expression nests (parentheses, NOT, operators): see above
+_TOO_DEEP = f"an expression nested at most {MAX_DEPTH} deep (parentheses, NOT, operators)"
 
 
 class ExpressionParser:
@@ -36,6 +45,8 @@ class ExpressionParser:
         self.i = 0
         self.source = source
         self.in_chart = False
+        self.nesting = 0  # parentheses, brackets, NOT... open around the token
+        self._depths: dict[int, int] = {}  # id(node) -> operators under it (a leaf: 0)
 
     # --- tokens ------------------------------------------------------------------
 
@@ -88,6 +99,26 @@ class ExpressionParser:
         if not _writable(node):
             self.fail(_TEXT_TARGET, tok)
 
+    # --- depth -----------------------------------------------------------------------
+
+    def enter(self, tok: Token) -> None:
+        """One level deeper (a parenthesis, NOT...), refused past MAX_DEPTH at ``tok``."""
+        self.nesting += 1
+        if self.nesting > MAX_DEPTH:
+            self.fail(_TOO_DEEP, tok)
+
+    def leave(self) -> None:
+        self.nesting -= 1
+
+    def deeper(self, node: t.Expr, tok: Token, *parts: t.Expr) -> t.Expr:
+        """``node`` over ``parts``: one deeper than the deepest of them (refused past
+        MAX_DEPTH at ``tok``)."""
+        depth = 1 + max((self._depths.get(id(p), 0) for p in parts), default=0)
+        if depth + self.nesting > MAX_DEPTH:
+            self.fail(_TOO_DEEP, tok)
+        self._depths[id(node)] = depth
+        return node
+
     # --- expressions ------------------------------------------------------------------
 
     def expr(self) -> tuple[t.Expr, Type]:
@@ -127,24 +158,28 @@ class ExpressionParser:
         want = BIT if op.on_bits else WORD
         if rtype != want:
             self.fail(f"a {want} operand after {symbol!r} (not {rtype})", rtok)
-        return t.Binary(op, left, right), want
+        return self.deeper(t.Binary(op, left, right), op_tok, left, right), want
 
     def unary(self) -> tuple[t.Expr, Type]:
         if self.is_word("NOT"):
-            self.advance()
+            not_tok = self.advance()
+            self.enter(not_tok)
             tok = self.tok
             operand, typ = self.unary()
             if typ != BIT:
                 self.fail("a bit after NOT", tok)
-            return t.Not(operand), BIT
+            self.leave()
+            return self.deeper(t.Not(operand), not_tok, operand), BIT
         return self.primary()
 
     def primary(self) -> tuple[t.Expr, Type]:
         tok = self.tok
         if tok.kind is Kind.OP and tok.text == "(":
             self.advance()
+            self.enter(tok)
             node, typ = self.expr()
             self.expect_op(")", "')'")
+            self.leave()
             return node, typ
         if tok.kind is Kind.OP and tok.text == "[":
             return self.comparison()
@@ -164,13 +199,15 @@ class ExpressionParser:
         if word == "BTA":
             self.advance()
             self.expect_op("(")
+            self.enter(tok)
             operand = self.word_operand()
             self.expect_op(")")
-            return t.Bta(operand), words(3)
+            self.leave()
+            return self.deeper(t.Bta(operand), tok, operand), words(3)
         return self.object()
 
     def comparison(self) -> tuple[t.Expr, Type]:
-        self.advance()
+        self.enter(self.advance())
         left = self.word_operand()
         tok = self.tok
         if tok.kind is not Kind.OP or tok.text not in t.COMPARE_OPS:
@@ -178,7 +215,8 @@ class ExpressionParser:
         self.advance()
         right = self.word_operand()
         self.expect_op("]", "']' closing the comparison")
-        return t.Compare(tok.text, left, right), BIT
+        self.leave()
+        return self.deeper(t.Compare(tok.text, left, right), tok, left, right), BIT
 
     def word_operand(self) -> t.Expr:
         tok = self.tok
@@ -204,10 +242,11 @@ class ExpressionParser:
         if tok.kind is not Kind.NUMBER or not 0 <= int(tok.text) <= MAX_SHIFT:
             self.fail(f"a shift count 0..{MAX_SHIFT} (SHL n(...))")
         self.advance()
-        self.expect_op("(", "'(' after the shift count")
+        self.enter(self.expect_op("(", "'(' after the shift count"))
         operand = self.word_operand()
         self.expect_op(")")
-        return t.Shift(left, int(tok.text), operand), WORD
+        self.leave()
+        return self.deeper(t.Shift(left, int(tok.text), operand), tok, operand), WORD
 
     # --- objects ------------------------------------------------------------------------
 

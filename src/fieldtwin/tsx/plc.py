@@ -6,6 +6,15 @@ input bits and words into its image and writes its output image to them
 A Text Block is validated at the end of the master task (AEM 4.2-2 "the request
 is validated at the end of the master task when the outputs are updated") and
 its report appears at the end of a later cycle.
+
+The task watchdog (docs/pl7.md, docs/manual-notes.md W-1): a master task that runs
+past its budget is cut; the PLC goes to its fault state (``fault`` says why, SY11
+reads 1, ``mode`` is FAULT): the master task no longer runs, the discrete outputs
+fall back to 0 (written to the modules at once), the register words keep their
+last value, the bus keeps being refreshed.  ``on_fault`` (the plant's event stream)
+is told.  The way back: a cold restart (``plc cold``, the console's init), a hot
+restart (``plc hot``: the program sees SY11), loading a program, or a power break
+longer than the power reserve; ``start`` (``plc run``) is refused while in fault.
 """
 
 from __future__ import annotations
@@ -18,8 +27,9 @@ from typing import TypeVar
 from fieldtwin import hosting
 from fieldtwin.clock import MS, Handle, S, SimClock, seconds
 from fieldtwin.errors import ConfigError
-from fieldtwin.pl7.executor import Executor
+from fieldtwin.pl7.executor import WATCHDOG_MS, Executor, budget_of
 from fieldtwin.pl7.tree import Internal
+from fieldtwin.textfile import MiB, read_text
 from fieldtwin.tsx import registry
 from fieldtwin.tsx.addressing import ObjectKind, ObjectRef, parse_object
 from fieldtwin.tsx.bus import Host, Pacer
@@ -56,6 +66,8 @@ ModuleOption = bool | int | float | str  # a module's own constructor option (qu
 
 
 POWER_RESERVE_US = 10 * MS  # a shorter break does not restart the modules (F-9)
+MAX_PROGRAM_BYTES = 1 * MiB  # a program file read (the tokenizer's bound is 1,000,000 characters)
+WATCHDOG_RANGE_MS = (10, 500)  # the task watchdog periods a plant may give (W-1)
 _W_RE = re.compile(r"^W(\d{1,5})$", re.IGNORECASE)
 _INTERNAL_RE = re.compile(r"^(XM|X|B|CW|SY|SW|W)(\d{1,5})(?:,([0-9A-F]))?$", re.IGNORECASE)
 
@@ -73,11 +85,16 @@ class Plc:
         speed: float | None = 1.0,
         host: Host | None = None,
         event_driven: bool = True,
+        watchdog_ms: float = WATCHDOG_MS,
     ) -> None:
         if model not in MODELS:
             raise ConfigError(f"unknown PLC model {model!r} (allowed: {', '.join(MODELS)})")
         if not 1 <= scan_ms <= 1000:
             raise ConfigError(f"scan_ms {scan_ms} out of range (allowed 1..1000 ms)")
+        low, high = WATCHDOG_RANGE_MS
+        if not low <= watchdog_ms <= high:
+            raise ConfigError(f"watchdog_ms {watchdog_ms} out of range (allowed {low}..{high} ms)")
+        self.watchdog_ms = watchdog_ms
         self.model = MODELS[model]
         self.scan_us = round(scan_ms * MS)
         self.clock = clock or SimClock()
@@ -85,6 +102,10 @@ class Plc:
         self.host = host  # None: fieldtwin.hosting's, asked when a real endpoint is wired
         self.speed = speed
         self.running = True
+        self.fault: str | None = None  # why the PLC is in its fault state (the watchdog)
+        # told (simulated time in µs, the reason) when the watchdog trips: the plant's
+        # event stream (fieldtwin.plant)
+        self.on_fault: Callable[[int, str], None] | None = None
         self._powered = True
         self.cycles = 0
         self.txt = TextBlocks(self.model.table_max, self.model.report_name, self._lookup)
@@ -295,6 +316,8 @@ class Plc:
             program.skip_idle = self.event_driven  # else every task runs, as on the PLC
             program.run_master_task(now)
             wrote = program.skipped == skipped  # a skipped task wrote nothing
+            if program.overrun is not None:
+                self._watchdog(program, now)
         registers = self.cycles % self.model.register_every == 0
         if not self.event_driven:
             for entry in self._slots.values():
@@ -365,11 +388,43 @@ class Plc:
 
     # --- PLC modes -------------------------------------------------------------
 
+    @property
+    def mode(self) -> str:
+        """RUN, STOP, or FAULT (stopped by the watchdog: ``fault`` says why)."""
+        if self.fault is not None:
+            return "FAULT"
+        return "RUN" if self.running else "STOP"
+
+    def _watchdog(self, program: Executor, now: int) -> None:
+        """The master task overran its budget: the PLC to its fault state."""
+        over = program.overrun
+        assert over is not None
+        self.running = False
+        self.fault = (
+            f"watchdog: master task exceeded {program.budget} operations"
+            f" ({self.watchdog_ms:g} ms) in {over.module} line {over.line}, task {over.cycle}"
+        )
+        for entry in self._slots.values():
+            entry.o_bits = 0  # the discrete outputs fall back to 0 (W-1)
+        self._outputs_touched = True
+        if self.on_fault is not None:
+            self.on_fault(now, self.fault)
+
+    def _clear_fault(self) -> None:
+        self.fault = None
+
     def stop(self) -> None:
         """PLC to STOP: the master task no longer runs (the bus keeps its image)."""
         self.running = False
 
     def start(self) -> None:
+        """PLC to RUN (refused in the watchdog's fault: a restart is the way back)."""
+        if self.fault is not None:
+            raise ConfigError(
+                f"the PLC is in its fault state ({self.fault}): fix the program"
+                " (prog load), then plc cold (a cold restart, SY0) or plc hot (SY1,"
+                " SY11 kept); RUN alone is refused"
+            )
         self.running = True
 
     def cold_restart(self) -> None:
@@ -386,12 +441,14 @@ class Plc:
             entry.module.power_on()
         if self.program is not None:  # SY0; internal bits and words cleared
             self.program.cold_restart()
+        self._clear_fault()
         self.running = True
 
     def hot_restart(self) -> None:
         """SY1: the program resumes; modules and internal objects keep their state."""
         if self.program is not None:
             self.program.hot_restart()
+        self._clear_fault()
         self.running = True
 
     def power_break(self, duration_s: float) -> None:
@@ -428,6 +485,9 @@ class Plc:
             self._read_inputs()
             if long_break and self.program is not None:  # AEM 2.5-3, DEM 2.5-3: SY1 = 1
                 self.program.hot_restart()
+            if long_break and self.fault is not None:  # a power cycle ends the fault
+                self._clear_fault()
+                self.running = True
 
         return power_back
 
@@ -514,7 +574,11 @@ class Plc:
         master task from now on.  A refused program is a Pl7Error (line, column, token)."""
         text, name = _program_text(path_or_text)
         executor = Executor.from_source(text, self.memory, source=source or name)
+        executor.budget = budget_of(self.watchdog_ms)
         self.program, self.program_source = executor, text
+        if self.fault is not None:  # a new program after the watchdog: a cold restart
+            self._clear_fault()
+            self.running = True
         return executor
 
     def set_calendar(
@@ -692,10 +756,8 @@ def _program_text(path_or_text: str | Path) -> tuple[str, str]:
         return path_or_text, ""
     path = Path(path_or_text)
     if isinstance(path_or_text, Path) or path.suffix.lower() == ".pl7" or path.exists():
-        try:
-            return path.read_text(encoding="utf-8"), str(path)
-        except OSError as err:
-            raise ConfigError(f"{path}: cannot read the program ({err.strerror})") from None
+        # a regular file of at most MAX_PROGRAM_BYTES of UTF-8: never a FIFO or a device
+        return read_text(path, MAX_PROGRAM_BYTES, "PL7 program"), str(path)
     return str(path_or_text), ""
 
 
@@ -710,4 +772,14 @@ def _bit_value(name: str, value: int) -> int:
     return value
 
 
-__all__ = ["DATA_WORDS", "MODELS", "ExchangeResult", "ExchangeTimeout", "Plc", "TextBlock"]
+__all__ = [
+    "DATA_WORDS",
+    "MAX_PROGRAM_BYTES",
+    "MODELS",
+    "WATCHDOG_MS",
+    "WATCHDOG_RANGE_MS",
+    "ExchangeResult",
+    "ExchangeTimeout",
+    "Plc",
+    "TextBlock",
+]

@@ -330,7 +330,8 @@ function draw(state) {
   if (state.plc) {
     document.getElementById("plc-model").textContent = state.plc.model;
     const mode = document.getElementById("plc-mode");
-    mode.textContent = state.plc.mode;
+    mode.textContent = state.plc.fault ? `${state.plc.mode}: ${state.plc.fault}` : state.plc.mode;
+    mode.title = state.plc.fault || "";
     mode.classList.toggle("stop", !state.plc.running);
     document.getElementById("plc-scan").textContent = `master task ${state.plc.scan_ms} ms`;
   }
