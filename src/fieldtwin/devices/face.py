@@ -215,6 +215,22 @@ class Fault:
         self.setter(False)
 
 
+Publish = Callable[[int, Mapping[str, object]], None]  # (simulated time in µs, the event's data)
+
+
+@dataclass(frozen=True, slots=True)
+class Stream:
+    """What a device emits, as it emits it (a DEM's messages with their stamps...).
+
+    ``kind`` is the event kind the runtime publishes it under (``"dem"``);
+    ``subscribe(publish)`` starts calling ``publish(now_us, data)`` on every
+    item and returns the function that stops it.  One subscriber at a time."""
+
+    kind: str
+    description: str
+    subscribe: Callable[[Publish], Callable[[], None]]
+
+
 class Objects(Protocol):
     """What a master reads and writes: PL7 objects of a module, registers of a TES."""
 
@@ -269,6 +285,10 @@ class Device(Protocol):
 
     def outputs(self) -> Mapping[str, Output]:
         """Every output the device drives (none for an input-only device)."""
+        ...
+
+    def streams(self) -> Sequence[Stream]:
+        """What the device publishes as it happens (none for most)."""
         ...
 
     def objects(self) -> Objects: ...

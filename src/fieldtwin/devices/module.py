@@ -10,7 +10,7 @@ its inputs the core's typed ``set_input(channel, level)`` if it has one
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from functools import partial
 from typing import Protocol, runtime_checkable
 
@@ -26,6 +26,7 @@ from fieldtwin.devices.face import (
     Output,
     Port,
     PortState,
+    Stream,
     active_faults,
     pick_fault,
     pick_input,
@@ -188,6 +189,9 @@ class ModuleDevice:
     def outputs(self) -> Mapping[str, Output]:
         """None for a module without a face of its own."""
         return {}
+
+    def streams(self) -> Sequence[Stream]:
+        return ()
 
     def fault(self, name: str) -> Fault:
         return pick_fault(self, name)

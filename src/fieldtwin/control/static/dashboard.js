@@ -113,10 +113,14 @@ function faultNote(d) { // the faults in force, whoever set them (the page, the 
   const active = d.active_faults || [];
   return active.length ? `<div class="alarm" data-f="faults">fault: ${esc(active.join(", "))}</div>` : "";
 }
+let pollsStarted = 0; // state requests sent so far
+let drawingPoll = 0; // the request whose answer is being drawn
 function syncFaults(panel, dev) { // each fault button shows whether its fault is in force now
   for (const fault of dev.faults || []) {
     const button = panel.root.querySelector(`button.fault[data-fault="${CSS.escape(fault.name)}"]`);
-    if (button) button.classList.toggle("active", Boolean(fault.active));
+    // an answer to a request sent before the button's own command is older than it
+    if (!button || Number(button.dataset.sentBefore || 0) >= drawingPoll) continue;
+    button.classList.toggle("active", Boolean(fault.active));
   }
 }
 
@@ -254,7 +258,7 @@ function controlsFor(kind, dev, ident) {
       let body;
       try { body = { active, params: needs && active ? numbers(parseParams(params.value)) : {} }; } catch (exc) { showError(`${fault.name}: ${exc.message}`, msg); return; }
       const done = await command("PUT", `${base}/faults/${encodeURIComponent(fault.name)}`, body, msg, `${fault.name} ${active ? "set" : "cleared"}`);
-      if (done) button.classList.toggle("active", active);
+      if (done) { button.classList.toggle("active", active); button.dataset.sentBefore = String(pollsStarted); }
     });
     faults.append(button);
     if (needs) faults.append(params);
@@ -377,10 +381,12 @@ let drawnAt = -1; // t_us of the newest state drawn: an older answer is not draw
 async function poll() {
   if (inFlight >= MAX_IN_FLIGHT) return;
   inFlight += 1;
+  const seq = ++pollsStarted;
   try {
     const state = await api("GET", "/dashboard/state");
     if (state.clock.t_us >= drawnAt) {
       drawnAt = state.clock.t_us;
+      drawingPoll = seq;
       draw(state);
       stats.updates += 1;
     }

@@ -14,7 +14,7 @@ Every TES-specific call of the face is in this file.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from functools import partial
 from pathlib import Path
 
@@ -33,6 +33,7 @@ from fieldtwin.devices.face import (
     PortKind,
     PortState,
     SignalSpec,
+    Stream,
     TesAddress,
     active_faults,
     applicable,
@@ -280,6 +281,9 @@ class TesDevice:
         unit = tes.model.analog_range.unit
         volts = round(tes.analog_output(k), 4) if tes.powered else 0.0
         return OutputValue(f"a{k}", volts, unit, tes.analog_output_word(k))
+
+    def streams(self) -> Sequence[Stream]:
+        return ()  # its register writes are published by the endpoint's wiretap
 
     def objects(self) -> TesRegisters:
         return TesRegisters(self.tes)
