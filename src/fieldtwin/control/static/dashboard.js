@@ -109,6 +109,12 @@ const panels = new Map(); // id -> { root, display, html }
 const refits = new Map(); // "kind:id:input" -> fits a slider to the input's range now
 const lastSerial = new Map(); // "slot channel dir" -> last text block seen
 
+function analogOutputsHtml(outputs) { // the outputs in the device's units, the word beside (bits: the O row)
+  const shown = (outputs || []).filter((o) => typeof o.value !== "boolean");
+  if (!shown.length) return "";
+  return `<table class="meas"><tr><th>output</th><th>value</th><th>word</th></tr>` +
+    shown.map((o) => `<tr><td>${esc(o.name)}</td><td data-aout="${esc(o.name)}">${Number(o.value).toFixed(3)} ${esc(o.unit)}</td><td>${o.raw === null ? "-" : "H'" + o.raw.toString(16).toUpperCase().padStart(4, "0") + "'"}</td></tr>`).join("") + "</table>";
+}
 function faultNote(d) { // the faults in force, whoever set them (the page, the API, the console)
   const active = d.active_faults || [];
   return active.length ? `<div class="alarm" data-f="faults">fault: ${esc(active.join(", "))}</div>` : "";
@@ -140,7 +146,7 @@ function moduleHtml(m) {
     }
     words += "</table>";
   }
-  return head + leds + bits + words + decodedHtml(m);
+  return head + leds + bits + words + analogOutputsHtml(m.outputs) + decodedHtml(m);
 }
 
 function decodedHtml(m) {
@@ -191,11 +197,7 @@ function tesHtml(t) {
     counters = `<details class="counters"><summary>counters</summary><table class="meas"><tr><th>input</th><th>rises</th><th>falls</th></tr>` +
       t.counters.map((c) => `<tr><td>${c.input}</td><td>${c.rise}</td><td>${c.fall}</td></tr>`).join("") + "</table></details>";
   }
-  let aout = "";
-  if ((t.analog_outputs || []).length) {
-    aout = `<table class="meas"><tr><th>output</th><th>value</th><th>word</th></tr>` +
-      t.analog_outputs.map((o) => `<tr><td>${esc(o.name)}</td><td data-aout="${esc(o.name)}">${Number(o.value).toFixed(3)} ${esc(o.unit)}</td><td>${o.raw === null ? "-" : "H'" + o.raw.toString(16).toUpperCase().padStart(4, "0") + "'"}</td></tr>`).join("") + "</table>";
-  }
+  const aout = analogOutputsHtml(t.analog_outputs);
   const wd = t.watchdog ? `<div>watchdog <b>${t.watchdog.seconds} s</b>${t.watchdog.word ? "" : " (off)"} · Wdg ${esc(t.watchdog.led)}</div>` : "";
   return head + faultNote(t) + leds + io + analog + aout + wd + counters;
 }
