@@ -19,7 +19,7 @@ from typing import Any
 import pytest
 
 from tests.control.plantproc import ROOT, Running
-from tests.dashboard.pages import open_controls, open_dashboard, wait_sim
+from tests.dashboard.pages import open_controls, open_dashboard
 from tests.devices.madeup import LEVEL
 
 START_S = 60.0
@@ -99,10 +99,9 @@ def test_the_made_up_device_on_the_dashboard(page: Any, plant: Running) -> None:
     assert hint.get_attribute("placeholder") == "mv=1"
     _put(plant, "/devices/3/faults/noise", {"params": {"mv": 50}})
     button = "#mod-3 button.fault[data-fault=noise]"
-    wait_sim(page, f"document.querySelector('{button}').classList.contains('active')", 10, 1.0)
+    page.wait_for_function(f"document.querySelector('{button}').classList.contains('active')")
     assert "noise mv=50" in page.locator("#mod-3 [data-f=faults]").inner_text()
     _put(plant, "/devices/3/objects/OW3,0", {"value": 4500})
-    wait_sim(page, "document.querySelector('#mod-3 [data-aout=\"0\"]') !== null", 10, 1.0)
     page.wait_for_function(
         "document.querySelector('#mod-3 [data-aout=\"0\"]').textContent === '4.500 V'"
     )
