@@ -34,7 +34,7 @@ from fieldtwin.console_syntax import (
 )
 from fieldtwin.console_trace import USAGE as TRACE_USAGE
 from fieldtwin.console_trace import ConsoleTrace
-from fieldtwin.devices.face import Device, ModuleAddress
+from fieldtwin.devices.face import Device, DeviceStatus, ModuleAddress
 from fieldtwin.devices.tes import TesDevice
 from fieldtwin.errors import ConfigError, FieldtwinError
 from fieldtwin.live import tes_line
@@ -60,7 +60,8 @@ HELP = {
     "                           e.g. signal 5 0 sine offset=5 amplitude=2 period_s=60",
     "fault": "fault MODULE NAME on|off [key=value...]  inject or clear a fault;"
     " 'faults MODULE' lists the names",
-    "faults": "faults MODULE             the faults a module can be given",
+    "faults": "faults MODULE             the faults a module can be given (* in force)",
+    "outputs": "outputs MODULE            the outputs it drives, in its units",
     "leds": "leds MODULE               the front-panel LEDs: OK=on ERR=off F=off",
     "power": "power break SECONDS       cut the PLC supply",
     "remove": "remove MODULE             pull a module out under power",
@@ -69,7 +70,7 @@ HELP = {
     "txt": "txt I [reset]             a Text Block's outputs; reset ends its exchange (TXTi,S = 1)",
     "tes": "tes [ENDPOINT] SLAVE read ADDR [N] | peek ADDR [N] | write ADDR VALUE"
     " | input I VALUE | signal I KIND key=value... | fault NAME on|off | faults | status | leds"
-    " | power-cycle",
+    " | outputs | power-cycle",
     "trace": f"{TRACE_USAGE}  the traffic on the wire; each advance shows its own",
     "prog": PROG_HELP,
     "help": "help [COMMAND]",
@@ -115,6 +116,7 @@ class Console:
             "signal": self._signal,
             "fault": self._fault,
             "faults": self._faults,
+            "outputs": self._outputs,
             "leds": self._leds,
             "power": self._power,
             "remove": self._remove,
@@ -309,7 +311,9 @@ class Console:
             lines.append(f"fault: {plc.fault}")
         for device in modules:
             lines.append("")
-            lines.extend(f"{key}: {value}" for key, value in device.status().details)
+            status = device.status()
+            lines.extend(f"{key}: {value}" for key, value in status.details)
+            lines.extend(fault_and_output_lines(status))
             address = device.address
             assert isinstance(address, ModuleAddress)
             rack, slot = address.rack, address.slot
@@ -345,6 +349,9 @@ class Console:
         if len(args) != 1:
             raise ConfigError("faults: takes MODULE")
         return list_faults(self._module(args[0]))
+
+    def _outputs(self, args: list[str]) -> list[str]:
+        return list_outputs(self._module(one_argument(args, "outputs MODULE")))
 
     def _leds(self, args: list[str]) -> list[str]:
         return [self._module(one_argument(args, "leds MODULE")).status().leds_text()]
@@ -428,8 +435,8 @@ class Console:
         ]
 
     def _tes_power_cycle(self, device: TesDevice, head: str, rest: list[str]) -> list[str]:
-        device.fault("power").set()
-        device.fault("power").clear()
+        device.fault("power_off").set()
+        device.fault("power_off").clear()
         return [f"{head} power cycled"]
 
     _TES_VERBS: ClassVar[
@@ -443,6 +450,7 @@ class Console:
         "fault": (2, 9, lambda c, d, h, r: set_fault(d, f"{h} fault", r)),
         "faults": (0, 0, lambda c, d, h, r: list_faults(d)),
         "status": (0, 0, lambda c, d, h, r: [tes_line(d)]),
+        "outputs": (0, 0, lambda c, d, h, r: list_outputs(d)),
         "leds": (0, 0, lambda c, d, h, r: [d.status().leds_text()]),
         "power-cycle": (0, 0, lambda c, d, h, r: c._tes_power_cycle(d, h, r)),
     }
@@ -503,9 +511,31 @@ def set_fault(device: Device, head: str, args: list[str]) -> list[str]:
 
 
 def list_faults(device: Device) -> list[str]:
-    return [f"{fault.name}: {fault.description}" for fault in device.faults().values()] or [
-        "(none)"
-    ]
+    """One line per fault that applies (``name: description``), then one line per fault
+    in force, marked ``*``: ``* late_answer active ms=200``."""
+    faults = device.faults().values()
+    lines = [f"{fault.name}: {fault.description}" for fault in faults]
+    for fault in faults:
+        params = fault.in_force()
+        if params is not None:
+            given = "".join(f" {k}={v:g}" for k, v in params.items())
+            lines.append(f"* {fault.name} active{given}")
+    return lines or ["(none)"]
+
+
+def list_outputs(device: Device) -> list[str]:
+    """``a4 = 4.500V (H'3FFF')``: every output the device drives, in its units."""
+    return [f"{o.name} = {o.read().text()}" for o in device.outputs().values()] or ["(none)"]
+
+
+def fault_and_output_lines(status: DeviceStatus) -> list[str]:
+    """``faults: late_answer ms=200`` and ``outputs: 0=1 a4=4.500V (H'3FFF')`` for ``status``."""
+    lines = []
+    if status.active_faults:
+        lines.append("faults: " + ", ".join(f.text() for f in status.active_faults))
+    if status.outputs:
+        lines.append("outputs: " + " ".join(f"{o.name}={o.text()}" for o in status.outputs))
+    return lines
 
 
 def run_script(

@@ -109,9 +109,34 @@ def _modules(plant: Plant, modules: list[Device], title: str, width: int) -> Tab
         else:
             bits = [f"{image.i_bits:04X}\n{o_bits:04X}"]
         table.add_row(
-            status.address, status.kind, mode(status), *lights, str(int(image.fault)), shown, *bits
+            status.address,
+            _kind(status),
+            mode(status),
+            *lights,
+            str(int(image.fault)),
+            shown,
+            *bits,
         )
     return table
+
+
+FAULT_MARK = "⚠"  # a device with a fault in force (set from the console, the API, the plant)
+
+
+def _kind(status: DeviceStatus) -> Text:
+    """The device's kind, marked when a fault is in force (the faults' names beside)."""
+    text = Text(status.kind)
+    if status.active_faults:
+        names = ",".join(f.name for f in status.active_faults)
+        text.append(f" {FAULT_MARK} {names}", style="bold red")
+    return text
+
+
+def faults_note(status: DeviceStatus) -> str:
+    """``  faults: late_answer ms=200`` when faults are in force, else ``""``."""
+    if not status.active_faults:
+        return ""
+    return "  faults: " + ", ".join(f.text() for f in status.active_faults)
 
 
 def output_bits(plc: Plc, rack: int, slot: int) -> int:
@@ -138,7 +163,7 @@ def _tes_table(devices: list[Device], width: int) -> Table:
         table.add_row(
             address.endpoint,
             str(address.slave),
-            status.kind,
+            _kind(status),
             f"{status.state} {word}".strip(),
             _leds(status),
         )
@@ -218,10 +243,15 @@ def plain_status(plant: Plant) -> list[str]:
         words = " ".join(f"H'{w:04X}'" for w in plc.image(rack, slot).iw)
         lines.append(
             f"slot {status.address} {status.kind}: {mode(status)} {status.leds_text()} IW {words}"
+            + faults_note(status)
         )
     if plc is not None and plc.program is not None:
         lines.append(program_line(plc))
-    lines.extend(tes_line(d) for d in plant.devices if isinstance(d.address, TesAddress))
+    lines.extend(
+        tes_line(d) + faults_note(d.status())
+        for d in plant.devices
+        if isinstance(d.address, TesAddress)
+    )
     return lines
 
 

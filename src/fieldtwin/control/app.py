@@ -148,7 +148,10 @@ def _plant_routes(app: FastAPI, c: Control, run: Run) -> None:
 
 
 def _device_routes(app: FastAPI, c: Control, run: Run) -> None:
-    @app.get("/devices/{ident}", summary="a device's status: state, mode, LEDs, ports")
+    @app.get(
+        "/devices/{ident}",
+        summary="a device's status: state, mode, LEDs, ports, active faults, outputs",
+    )
     async def status(ident: str) -> Any:
         return await run(lambda: c.status(ident))
 
@@ -164,7 +167,10 @@ def _device_routes(app: FastAPI, c: Control, run: Run) -> None:
     async def set_input(ident: str, name: str, body: InputBody) -> Any:
         return await run(lambda: c.set_input(ident, name, body.value, body.signal))
 
-    @app.get("/devices/{ident}/faults", summary="the faults a device can be given")
+    @app.get(
+        "/devices/{ident}/faults",
+        summary="the faults that apply to a device, each active or not, with its parameters",
+    )
     async def faults(ident: str) -> Any:
         return await run(lambda: c.faults(ident))
 
@@ -175,6 +181,14 @@ def _device_routes(app: FastAPI, c: Control, run: Run) -> None:
     @app.delete("/devices/{ident}/faults/{name}", summary="clear a fault")
     async def clear_fault(ident: str, name: str) -> Any:
         return await run(lambda: c.set_fault(ident, name, False, {}))
+
+    @app.get(
+        "/devices/{ident}/outputs",
+        summary="every output a device drives, in its units, the raw word beside",
+        responses={404: {"description": "no such device (the message lists the devices)"}},
+    )
+    async def outputs(ident: str) -> Any:
+        return await run(lambda: c.outputs(ident))
 
     @app.get("/devices/{ident}/objects", summary="the objects a master reads and writes")
     async def objects(ident: str) -> Any:

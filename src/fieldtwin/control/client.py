@@ -149,7 +149,12 @@ class Client:
         return dict(self.request("PUT", path, {"signal": dict(signal)}))
 
     def faults(self, device: str) -> list[dict[str, Any]]:
+        """Each fault that applies, with ``active`` and the ``params`` it is in force with."""
         return list(self.request("GET", f"/devices/{_name(device)}/faults"))
+
+    def outputs(self, device: str) -> list[dict[str, Any]]:
+        """Each output the device drives: ``value`` in its ``unit``, the ``raw`` word beside."""
+        return list(self.request("GET", f"/devices/{_name(device)}/outputs"))
 
     def set_fault(
         self, device: str, name: str, active: bool = True, **params: float

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import re
 
-from fieldtwin.control.resources import Control
+from fieldtwin.control.resources import Control, fault_json, output_json
 from fieldtwin.devices.dem24 import Dem24Device
 from fieldtwin.devices.face import Device, TesAddress
 from fieldtwin.devices.module import ModuleDevice
@@ -120,9 +120,9 @@ def module_panel(device: ModuleDevice, plc: Plc, ident: str) -> Json:
         "details": details,
         "decoded": _decoded(device, details),
         "inputs": list(device.inputs()),
-        "faults": [
-            {"name": f.name, "description": f.description} for f in device.faults().values()
-        ],
+        "faults": [fault_json(f) for f in device.faults().values()],
+        "active_faults": [f.text() for f in status.active_faults],
+        "outputs": [output_json(o) for o in status.outputs],
     }
     return out
 
@@ -211,9 +211,10 @@ def tes_panel(device: Device, ident: str, now: int) -> Json:
         "state": status.state,
         "leds": [[name, state] for name, state in status.leds],
         "status": dict(status.details).get("status", ""),
-        "faults": [
-            {"name": f.name, "description": f.description} for f in device.faults().values()
-        ],
+        "faults": [fault_json(f) for f in device.faults().values()],
+        "active_faults": [f.text() for f in status.active_faults],
+        # every analog output in the device's units (volts, milliamps), the word beside
+        "analog_outputs": [output_json(o) for o in status.outputs if not isinstance(o.value, bool)],
     }
     if not isinstance(device, TesDevice) or status.state == "off":
         return {**out, "inputs": [], "outputs": [], "counters": [], "analog": [], "watchdog": None}

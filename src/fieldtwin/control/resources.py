@@ -17,7 +17,16 @@ from fieldtwin.clock import MS, S
 from fieldtwin.clock import seconds as to_us
 from fieldtwin.console import Console
 from fieldtwin.console_syntax import module_address
-from fieldtwin.devices.face import Device, DeviceStatus, Family, Input, device_id
+from fieldtwin.devices.face import (
+    Device,
+    DeviceStatus,
+    Family,
+    Fault,
+    FaultNotApplicable,
+    Input,
+    OutputValue,
+    device_id,
+)
 from fieldtwin.errors import ConfigError, FieldtwinError
 from fieldtwin.plant import Plant
 from fieldtwin.runtime.events import EventBus
@@ -52,6 +61,30 @@ def status_json(status: DeviceStatus) -> Json:
         "leds": dict(status.leds),
         "ports": [{"name": p.name, "line": p.line} for p in status.ports],
         "details": dict(status.details),
+        "active_faults": {f.name: dict(f.params) for f in status.active_faults},
+        "outputs": [output_json(o) for o in status.outputs],
+    }
+
+
+def output_json(value: OutputValue, description: str | None = None) -> Json:
+    """One output: its value in the device's units (a bit: true/false), the raw word."""
+    out: Json = {"name": value.name}
+    if description is not None:
+        out["description"] = description
+    out.update({"value": value.value, "unit": value.unit, "raw": value.raw, "text": value.text()})
+    return out
+
+
+def fault_json(fault: Fault) -> Json:
+    """A fault: whether it is in force and with which parameters; what it takes."""
+    params = fault.in_force()
+    return {
+        "name": fault.name,
+        "description": fault.description,
+        "active": params is not None,
+        "params": dict(params or {}),
+        "takes": list(fault.params),
+        "hint": fault.hint(),
     }
 
 
@@ -156,15 +189,19 @@ class Control:
             raise NotFound(str(exc)) from None
 
     def faults(self, ident: str) -> list[Json]:
-        return [
-            {"name": f.name, "description": f.description, "params": list(f.params)}
-            for f in self.device(ident).faults().values()
-        ]
+        """The faults that apply to the device, each active or not, with its parameters."""
+        return [fault_json(f) for f in self.device(ident).faults().values()]
+
+    def outputs(self, ident: str) -> list[Json]:
+        """Every output the device drives, in its units (volts, milliamps), raw word beside."""
+        return [output_json(o.read(), o.description) for o in self.device(ident).outputs().values()]
 
     def set_fault(self, ident: str, name: str, active: bool, params: Mapping[str, float]) -> Json:
         device = self.device(ident)
         try:
             fault = device.fault(name)
+        except FaultNotApplicable:
+            raise  # a line fault none of its ports carries: 400, naming where it applies
         except ConfigError as exc:
             raise NotFound(str(exc)) from None
         numbers = {k: int(v) if float(v).is_integer() else v for k, v in params.items()}

@@ -58,6 +58,18 @@ Address = ModuleAddress | TesAddress
 
 
 @dataclass(frozen=True, slots=True)
+class PortKind:
+    """What a port is (``Modbus TCP``, ``RTU line``, ``SCM channel``...) and the line
+    faults that mean something on it (``bad_crc`` on an RTU line, not on Modbus TCP)."""
+
+    name: str
+    line_faults: tuple[str, ...] = ()
+
+
+ANY_PORT = PortKind("port")  # a port that declares no kind of its own: no line fault applies
+
+
+@dataclass(frozen=True, slots=True)
 class PortState:
     """One port of a device and the state of its line, for people."""
 
@@ -76,6 +88,8 @@ class DeviceStatus:
     leds: tuple[tuple[str, LedState], ...]  # front-panel order
     ports: tuple[PortState, ...] = ()
     details: tuple[tuple[str, str], ...] = ()  # device-specific lines (console status)
+    active_faults: tuple[ActiveFault, ...] = ()  # the faults in force, in the device's order
+    outputs: tuple[OutputValue, ...] = ()  # every output the device drives, now
 
     @property
     def led_map(self) -> dict[str, LedState]:
@@ -108,6 +122,51 @@ class Input:
 
 
 FaultParam = int | float
+PARAM_EXAMPLES: dict[str, FaultParam] = {"ms": 200, "count": 3, "window_ms": 20}
+
+
+@dataclass(frozen=True, slots=True)
+class ActiveFault:
+    """A fault in force and the parameters it is in force with (``{"ms": 200}``)."""
+
+    name: str
+    params: Mapping[str, FaultParam]
+
+    def text(self) -> str:
+        """``late_answer ms=200``, ``power_off``: as the console and the live view show it."""
+        return " ".join([self.name, *(f"{k}={v:g}" for k, v in self.params.items())])
+
+
+@dataclass(frozen=True, slots=True)
+class OutputValue:
+    """One output as it stands: its value in the device's units, the raw word beside.
+
+    A bit is a bool with unit ``""``; an analog output a float in ``"V"`` or ``"mA"``
+    with ``raw`` the word the master wrote; ``raw`` is None where there is no word."""
+
+    name: str
+    value: bool | float
+    unit: str = ""
+    raw: int | None = None
+
+    def text(self) -> str:
+        """``1``, ``0``, ``4.500V``, ``12.000mA (H'3FFF')``: as the console shows it."""
+        if isinstance(self.value, bool):
+            return str(int(self.value))
+        word = "" if self.raw is None else f" (H'{self.raw & 0xFFFF:04X}')"
+        return f"{self.value:.3f}{self.unit}{word}"
+
+
+@dataclass(frozen=True, slots=True)
+class Output:
+    """A named output the device drives, named as the plant file names inputs."""
+
+    name: str
+    description: str  # "digital", "analog, volts"
+    reader: Callable[[], OutputValue]
+
+    def read(self) -> OutputValue:
+        return self.reader()
 
 
 @dataclass(frozen=True, slots=True)
@@ -116,6 +175,10 @@ class Fault:
 
     ``params`` names what ``set`` takes (a TES's ``late_answer`` takes ``ms``);
     ``configure`` receives them.  A fault without parameters has only ``setter``.
+    ``state`` tells whether it is in force: the parameters it is in force with, or
+    None when it is not; a fault without ``state`` cannot tell (never shown active).
+    ``port_kinds`` names the kinds of port a line fault means something on
+    (``bad_crc``: an RTU line); empty, the fault is the device's own and always applies.
     """
 
     name: str
@@ -123,6 +186,20 @@ class Fault:
     setter: Callable[[bool], None]
     params: tuple[str, ...] = ()
     configure: Callable[[bool, Mapping[str, FaultParam]], None] | None = None
+    state: Callable[[], Mapping[str, FaultParam] | None] | None = None
+    port_kinds: tuple[str, ...] = ()
+
+    def in_force(self) -> Mapping[str, FaultParam] | None:
+        """The parameters it is in force with (``{}`` for none), or None when it is not."""
+        return None if self.state is None else self.state()
+
+    @property
+    def active(self) -> bool:
+        return self.in_force() is not None
+
+    def hint(self) -> str:
+        """What ``set`` takes, as a user writes it: ``ms=200``, ``count=3``, ``""``."""
+        return " ".join(f"{p}={PARAM_EXAMPLES.get(p, 1)}" for p in self.params)
 
     def set(self, active: bool = True, **params: FaultParam) -> None:
         if self.configure is not None:
@@ -136,6 +213,22 @@ class Fault:
 
     def clear(self) -> None:
         self.setter(False)
+
+
+Publish = Callable[[int, Mapping[str, object]], None]  # (simulated time in µs, the event's data)
+
+
+@dataclass(frozen=True, slots=True)
+class Stream:
+    """What a device emits, as it emits it (a DEM's messages with their stamps...).
+
+    ``kind`` is the event kind the runtime publishes it under (``"dem"``);
+    ``subscribe(publish)`` starts calling ``publish(now_us, data)`` on every
+    item and returns the function that stops it.  One subscriber at a time."""
+
+    kind: str
+    description: str
+    subscribe: Callable[[Publish], Callable[[], None]]
 
 
 class Objects(Protocol):
@@ -161,6 +254,7 @@ class Port:
     name: str
     endpoint: str
     group: str  # ports with the same group and endpoint share one line ("modbus", "scm")
+    kind: PortKind = ANY_PORT  # what the port is, and the line faults that apply to it
 
 
 class Device(Protocol):
@@ -187,6 +281,14 @@ class Device(Protocol):
 
     def fault(self, name: str) -> Fault:
         """One fault by name; the error names the device and what is allowed."""
+        ...
+
+    def outputs(self) -> Mapping[str, Output]:
+        """Every output the device drives (none for an input-only device)."""
+        ...
+
+    def streams(self) -> Sequence[Stream]:
+        """What the device publishes as it happens (none for most)."""
         ...
 
     def objects(self) -> Objects: ...
@@ -234,15 +336,59 @@ def pick_input(device: Device, name: str) -> Input:
     return found
 
 
-def pick_fault(device: Device, name: str) -> Fault:
+class FaultNotApplicable(ConfigError):
+    """A line fault none of the device's ports can carry (answered 400, not 404)."""
+
+
+def applies(fault: Fault, ports: Sequence[Port]) -> bool:
+    """A device fault always applies; a line fault where one of ``ports`` is of its kinds."""
+    return not fault.port_kinds or any(fault.name in p.kind.line_faults for p in ports)
+
+
+def applicable(faults: Mapping[str, Fault], ports: Sequence[Port]) -> dict[str, Fault]:
+    """The faults of ``faults`` that apply to a device with ``ports`` (what ``faults()`` gives)."""
+    return {name: f for name, f in faults.items() if applies(f, ports)}
+
+
+def refuse_inapplicable(device: Device, fault: Fault) -> None:
+    """A line fault none of the device's ports carries: refused, naming where it applies."""
+    ports = device.ports()
+    if applies(fault, ports):
+        return
+    has = ", ".join(dict.fromkeys(p.kind.name for p in ports)) or "no port"
+    raise FaultNotApplicable(
+        f"fault {fault.name!r} does not apply to {device.kind} {device.address}: it applies"
+        f" to ports of kind {' or '.join(fault.port_kinds)}; this device has {has}"
+    )
+
+
+def pick_fault(device: Device, name: str, every: Mapping[str, Fault] | None = None) -> Fault:
+    """The fault ``name`` of ``device``; ``every`` (all its kind's faults, whatever its
+    ports) tells a line fault that does not apply here from an unknown name."""
     faults = device.faults()
     found = faults.get(name.strip())
+    if found is None and every is not None and name.strip() in every:
+        refuse_inapplicable(device, every[name.strip()])
     if found is None:
         allowed = ", ".join(faults) or "none"
         raise ConfigError(
             f"unknown fault {name!r} for {device.kind} {device.address} (allowed: {allowed})"
         )
     return found
+
+
+def active_faults(faults: Mapping[str, Fault]) -> tuple[ActiveFault, ...]:
+    """The faults of ``faults`` in force, with their parameters (for ``DeviceStatus``)."""
+    found = []
+    for fault in faults.values():
+        params = fault.in_force()
+        if params is not None:
+            found.append(ActiveFault(fault.name, dict(params)))
+    return tuple(found)
+
+
+def read_outputs(outputs: Mapping[str, Output]) -> tuple[OutputValue, ...]:
+    return tuple(o.read() for o in outputs.values())
 
 
 def device_id(device: Device, devices: Sequence[Device]) -> str:

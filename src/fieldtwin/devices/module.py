@@ -10,7 +10,7 @@ its inputs the core's typed ``set_input(channel, level)`` if it has one
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 from functools import partial
 from typing import Protocol, runtime_checkable
 
@@ -19,13 +19,18 @@ from fieldtwin.devices.face import (
     DeviceStatus,
     Family,
     Fault,
+    FaultParam,
     Input,
     InputValue,
     ModuleAddress,
+    Output,
     Port,
     PortState,
+    Stream,
+    active_faults,
     pick_fault,
     pick_input,
+    read_outputs,
 )
 from fieldtwin.devices.schema import Key, Schema, Table, integer, optional_integer, string
 from fieldtwin.errors import ConfigError
@@ -89,6 +94,9 @@ class ModuleDevice:
     def __init__(self, module: IntelligentModule, plc: Plc) -> None:
         self.module = module
         self.plc = plc
+        # the faults set through this face and not cleared since, with their parameters
+        # (a module's fault is a condition put on it: a cut wire stays cut until cleared)
+        self.in_force: dict[str, dict[str, FaultParam]] = {}
 
     # --- identity ---------------------------------------------------------
 
@@ -116,6 +124,8 @@ class ModuleDevice:
             leds=self.leds(),
             ports=tuple(self.port_states()),
             details=tuple(m.status().items()),
+            active_faults=active_faults(self.faults()),
+            outputs=read_outputs(self.outputs()),
         )
 
     def mode(self) -> str | None:
@@ -156,9 +166,32 @@ class ModuleDevice:
     def faults(self) -> Mapping[str, Fault]:
         m = self.module
         return {
-            name: Fault(name, text, partial(m.inject_fault, name))
+            name: self.tracked(name, text, partial(m.inject_fault, name))
             for name, text in m.fault_names().items()
         }
+
+    def tracked(self, name: str, description: str, setter: Callable[[bool], None]) -> Fault:
+        """A fault without parameters whose state is what this face last set."""
+        return Fault(
+            name,
+            description,
+            partial(self._set_tracked, name, setter),
+            state=partial(self.in_force.get, name),
+        )
+
+    def _set_tracked(self, name: str, setter: Callable[[bool], None], active: bool) -> None:
+        setter(active)
+        if active:
+            self.in_force[name] = {}
+        else:
+            self.in_force.pop(name, None)
+
+    def outputs(self) -> Mapping[str, Output]:
+        """None for a module without a face of its own."""
+        return {}
+
+    def streams(self) -> Sequence[Stream]:
+        return ()
 
     def fault(self, name: str) -> Fault:
         return pick_fault(self, name)

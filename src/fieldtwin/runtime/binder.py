@@ -17,10 +17,9 @@ the ``scm`` group only, leaving the TES's Modbus endpoints closed.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Collection, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from functools import partial
 
-from fieldtwin.devices.dem24 import Dem24Device
 from fieldtwin.devices.face import Device, Port
 from fieldtwin.devices.scm import GROUP as SERIAL_LINE
 from fieldtwin.devices.scm import ScmDevice
@@ -32,7 +31,6 @@ from fieldtwin.runtime.modbus_server import ModbusServer
 from fieldtwin.runtime.runner import Runner
 from fieldtwin.runtime.wiretap import CharTap
 from fieldtwin.transports.url import parse_endpoint
-from fieldtwin.tsx.dem24.stack import Message, MessageType
 from fieldtwin.tsx.scm.endpoints import MemoryPeer
 
 ALL = (MODBUS, SERIAL_LINE)
@@ -71,7 +69,7 @@ def bind(
         if SERIAL_LINE in groups:
             _attach_channels(devices, binding, events)
             if events is not None:  # the modules' group: bound once per plant
-                _tap_logbooks(devices, binding, events)
+                _tap_streams(devices, binding, events)
     except BaseException:
         binding.close()
         raise
@@ -128,41 +126,20 @@ def _tap_channels(device: ScmDevice, events: EventBus) -> None:
             wired.peer.tap = tap
 
 
-KIND_DEM = "dem"
-
-
-def _tap_logbooks(devices: Sequence[Device], binding: Binding, events: EventBus) -> None:
-    """Every DEM's logbook publishes each message as it is logged (or lost, stack full)."""
+def _tap_streams(devices: Sequence[Device], binding: Binding, events: EventBus) -> None:
+    """Every stream a device's face offers (a DEM's messages...) is published on the bus."""
     for device in devices:
-        if isinstance(device, Dem24Device):
-            logbook = device.dem.logbook
-            logbook.tap = _dem_tap(device, events)
-            binding.add([], partial(setattr, logbook, "tap", None))
+        source = str(device.address)
+        for stream in device.streams():
+            stop = stream.subscribe(partial(_publish, events, stream.kind, source))
+            binding.add([], stop)
 
 
-def _dem_tap(device: Dem24Device, events: EventBus) -> Callable[[Message, bool, bool, int], None]:
-    address, clock = str(device.address), device.dem.clock
-
-    def tap(message: Message, stored: bool, flagged: bool, fill: int) -> None:
-        if not events.active:
-            return
-        change = message.type is MessageType.CHANGE
-        data: dict[str, object] = {
-            "type": "change" if change else "overall",
-            "stamp": str(message.stamp),
-            "h": message.h,
-            "indicator": message.indicator,
-            "stored": stored,
-            "overflow": flagged,
-            "stack": fill,
-        }
-        if change:
-            data["channel"], data["state"] = message.channel, message.state
-        else:
-            data["words"] = [f"{w:04X}" for w in message.body]
-        events.publish(clock.now, KIND_DEM, address, data)
-
-    return tap
+def _publish(
+    events: EventBus, kind: str, source: str, now: int, data: Mapping[str, object]
+) -> None:
+    if events.active:
+        events.publish(now, kind, source, dict(data))
 
 
 def _detacher(device: ScmDevice, port: Port) -> Callable[[], None]:

@@ -417,6 +417,12 @@ class Tes:
         points = dac_points(self.ram.word(0x014 + k), self.ram.params, k)
         return points / 32767 * self.model.analog_range.full_scale
 
+    def analog_output_word(self, k: int) -> int:
+        """The word the master wrote to analog output k (§6.4.7), as it stands."""
+        if k not in self.model.analog_outputs:
+            raise ConfigError(f"{self.model.name}: no analog output {k}")
+        return self.ram.word(0x014 + k)
+
     @property
     def leds(self) -> dict[str, LED]:
         """§3.1.2 front-panel LEDs: Pwr, Run, Prm (green) and Wdg (red), "on"/"off"/"blink"."""

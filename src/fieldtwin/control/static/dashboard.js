@@ -109,9 +109,30 @@ const panels = new Map(); // id -> { root, display, html }
 const refits = new Map(); // "kind:id:input" -> fits a slider to the input's range now
 const lastSerial = new Map(); // "slot channel dir" -> last text block seen
 
+function analogOutputsHtml(outputs) { // the outputs in the device's units, the word beside (bits: the O row)
+  const shown = (outputs || []).filter((o) => typeof o.value !== "boolean");
+  if (!shown.length) return "";
+  return `<table class="meas"><tr><th>output</th><th>value</th><th>word</th></tr>` +
+    shown.map((o) => `<tr><td>${esc(o.name)}</td><td data-aout="${esc(o.name)}">${Number(o.value).toFixed(3)} ${esc(o.unit)}</td><td>${o.raw === null ? "-" : "H'" + o.raw.toString(16).toUpperCase().padStart(4, "0") + "'"}</td></tr>`).join("") + "</table>";
+}
+function faultNote(d) { // the faults in force, whoever set them (the page, the API, the console)
+  const active = d.active_faults || [];
+  return active.length ? `<div class="alarm" data-f="faults">fault: ${esc(active.join(", "))}</div>` : "";
+}
+let pollsStarted = 0; // state requests sent so far
+let drawingPoll = 0; // the request whose answer is being drawn
+function syncFaults(panel, dev) { // each fault button shows whether its fault is in force now
+  for (const fault of dev.faults || []) {
+    const button = panel.root.querySelector(`button.fault[data-fault="${CSS.escape(fault.name)}"]`);
+    // an answer to a request sent before the button's own command is older than it
+    if (!button || Number(button.dataset.sentBefore || 0) >= drawingPoll) continue;
+    button.classList.toggle("active", Boolean(fault.active));
+  }
+}
+
 function moduleHtml(m) {
   const head = `<div class="head"><b>slot ${esc(m.address)}</b> <span class="kind">${esc(m.kind)}</span>
-    <span class="state" data-f="state">${esc(m.present ? m.state : "removed")}${m.mode ? " · " + esc(m.mode) : ""}</span></div>`;
+    <span class="state" data-f="state">${esc(m.present ? m.state : "removed")}${m.mode ? " · " + esc(m.mode) : ""}</span></div>` + faultNote(m);
   const leds = `<div class="leds">${m.leds.map(([n, s]) => led(n, s)).join("")}
     <span class="is">I,S <b data-f="is">${m.is}</b></span></div>`;
   const bits = bitRow(`I${m.address}`, m.i_bits, m.points, "i") + bitRow(`O${m.address}`, m.o_bits, m.points, "o");
@@ -125,7 +146,7 @@ function moduleHtml(m) {
     }
     words += "</table>";
   }
-  return head + leds + bits + words + decodedHtml(m);
+  return head + leds + bits + words + analogOutputsHtml(m.outputs) + decodedHtml(m);
 }
 
 function decodedHtml(m) {
@@ -176,8 +197,9 @@ function tesHtml(t) {
     counters = `<details class="counters"><summary>counters</summary><table class="meas"><tr><th>input</th><th>rises</th><th>falls</th></tr>` +
       t.counters.map((c) => `<tr><td>${c.input}</td><td>${c.rise}</td><td>${c.fall}</td></tr>`).join("") + "</table></details>";
   }
+  const aout = analogOutputsHtml(t.analog_outputs);
   const wd = t.watchdog ? `<div>watchdog <b>${t.watchdog.seconds} s</b>${t.watchdog.word ? "" : " (off)"} · Wdg ${esc(t.watchdog.led)}</div>` : "";
-  return head + leds + io + analog + wd + counters;
+  return head + faultNote(t) + leds + io + analog + aout + wd + counters;
 }
 
 function controlsFor(kind, dev, ident) {
@@ -229,16 +251,16 @@ function controlsFor(kind, dev, ident) {
     box.append(row);
   }
   const faults = el("div", { class: "faults" }, el("span", { class: "lbl" }, "faults"));
-  for (const fault of dev.faults) {
-    const params = el("input", { class: "args", size: "8", placeholder: "ms=200" });
-    const needs = /late_answer|bad_crc|broken_character|not_ready/.test(fault.name);
-    const button = el("button", { type: "button", class: "fault", "data-fault": fault.name, title: fault.description }, fault.name);
+  for (const fault of dev.faults) { // the faults that apply to this device, as its face lists them
+    const params = el("input", { class: "args", size: "8", placeholder: fault.hint || "" });
+    const needs = (fault.takes || []).length > 0;
+    const button = el("button", { type: "button", class: fault.active ? "fault active" : "fault", "data-fault": fault.name, title: fault.description }, fault.name);
     button.addEventListener("click", async () => {
       const active = !button.classList.contains("active");
       let body;
       try { body = { active, params: needs && active ? numbers(parseParams(params.value)) : {} }; } catch (exc) { showError(`${fault.name}: ${exc.message}`, msg); return; }
       const done = await command("PUT", `${base}/faults/${encodeURIComponent(fault.name)}`, body, msg, `${fault.name} ${active ? "set" : "cleared"}`);
-      if (done) button.classList.toggle("active", active);
+      if (done) { button.classList.toggle("active", active); button.dataset.sentBefore = String(pollsStarted); }
     });
     faults.append(button);
     if (needs) faults.append(params);
@@ -340,6 +362,7 @@ function draw(state) {
     const panel = ensurePanel(modules, "module", m);
     const html = moduleHtml(m);
     if (html !== panel.html) { panel.display.innerHTML = html; panel.html = html; }
+    syncFaults(panel, m);
     for (const name of m.inputs) refits.get(`module:${m.id}:${name}`)?.(m);
   }
   const tesList = document.getElementById("tes-list");
@@ -347,6 +370,7 @@ function draw(state) {
     const panel = ensurePanel(tesList, "tes", t);
     const html = tesHtml(t);
     if (html !== panel.html) { panel.display.innerHTML = html; panel.html = html; }
+    syncFaults(panel, t);
   }
   trends.sample(state);
 }
@@ -360,10 +384,12 @@ let drawnAt = -1; // t_us of the newest state drawn: an older answer is not draw
 async function poll() {
   if (inFlight >= MAX_IN_FLIGHT) return;
   inFlight += 1;
+  const seq = ++pollsStarted;
   try {
     const state = await api("GET", "/dashboard/state");
     if (state.clock.t_us >= drawnAt) {
       drawnAt = state.clock.t_us;
+      drawingPoll = seq;
       draw(state);
       stats.updates += 1;
     }

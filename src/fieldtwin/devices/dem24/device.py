@@ -9,14 +9,14 @@ Every DEM-specific call of the face is in this file.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 from functools import partial
 from pathlib import Path
 
 from fieldtwin.devices.common import apply_faults, apply_inputs
 from fieldtwin.devices.context import BuildContext
 from fieldtwin.devices.dem24.plantkeys import configure, console_value
-from fieldtwin.devices.face import Family, Input, InputValue, SignalSpec
+from fieldtwin.devices.face import Family, Input, InputValue, Publish, SignalSpec, Stream
 from fieldtwin.devices.kind import Build, DeviceKind
 from fieldtwin.devices.module import IDENTITY, ModuleDevice, insert_module, own_keys
 from fieldtwin.devices.schema import Key, Schema, Table
@@ -24,13 +24,30 @@ from fieldtwin.errors import ConfigError
 from fieldtwin.signals import signal_from_spec
 from fieldtwin.tsx.dem24.inputs import CHANNELS
 from fieldtwin.tsx.dem24.models import Dem24, Dem2412, Dem2413
+from fieldtwin.tsx.dem24.stack import Message, MessageType
 from fieldtwin.tsx.plc import Plc
+
+KIND_DEM = "dem"  # the event kind of a DEM's messages (docs/control.md, "Events")
 
 
 class Dem24Device(ModuleDevice):
     def __init__(self, module: Dem24, plc: Plc) -> None:
         super().__init__(module, plc)
         self.dem = module
+
+    def streams(self) -> Sequence[Stream]:
+        """Each message as the DEM logs it (or loses it, stack full), with its stamp."""
+        return (Stream(KIND_DEM, "messages logged, with their time stamps", self._subscribe),)
+
+    def _subscribe(self, publish: Publish) -> Callable[[], None]:
+        logbook = self.dem.logbook
+        clock = self.dem.clock
+
+        def tap(message: Message, stored: bool, flagged: bool, fill: int) -> None:
+            publish(clock.now, message_data(message, stored, flagged, fill))
+
+        logbook.tap = tap
+        return partial(setattr, logbook, "tap", None)
 
     def inputs(self) -> Mapping[str, Input]:
         return {
@@ -111,3 +128,22 @@ KINDS = tuple(
     DeviceKind(cls.type_name, Family.MODULE, SCHEMA, _builder(cls), cls)
     for cls in (Dem2412, Dem2413)
 )
+
+
+def message_data(message: Message, stored: bool, flagged: bool, fill: int) -> dict[str, object]:
+    """A DEM message as its event carries it (DEM 4.2-2: the stamp, the change or the words)."""
+    change = message.type is MessageType.CHANGE
+    data: dict[str, object] = {
+        "type": "change" if change else "overall",
+        "stamp": str(message.stamp),
+        "h": message.h,
+        "indicator": message.indicator,
+        "stored": stored,
+        "overflow": flagged,
+        "stack": fill,
+    }
+    if change:
+        data["channel"], data["state"] = message.channel, message.state
+    else:
+        data["words"] = [f"{w:04X}" for w in message.body]
+    return data

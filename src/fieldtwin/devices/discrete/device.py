@@ -13,7 +13,15 @@ from pathlib import Path
 
 from fieldtwin.devices.common import apply_faults, apply_inputs
 from fieldtwin.devices.context import BuildContext
-from fieldtwin.devices.face import Family, Input, InputValue, ModuleAddress, SignalSpec
+from fieldtwin.devices.face import (
+    Family,
+    Input,
+    InputValue,
+    ModuleAddress,
+    Output,
+    OutputValue,
+    SignalSpec,
+)
 from fieldtwin.devices.kind import Build, DeviceKind
 from fieldtwin.devices.module import IDENTITY, ModuleDevice, insert_module, own_keys
 from fieldtwin.devices.schema import Key, Schema, Table
@@ -43,6 +51,20 @@ class DiscreteDevice(ModuleDevice):
             )
             for p in range(module.points)
         }
+
+    def outputs(self) -> Mapping[str, Output]:
+        """An output module's points ``"0"``..``"F"``, as the program wrote them (Oxy,i)."""
+        module = self.discrete
+        if not isinstance(module, DiscreteOutputs):
+            return {}
+        return {
+            f"{p:X}": Output(f"{p:X}", "digital", partial(self._output, module, p))
+            for p in range(module.discrete_outputs)
+        }
+
+    @staticmethod
+    def _output(module: DiscreteOutputs, point: int) -> OutputValue:
+        return OutputValue(f"{point:X}", bool(module.output(point)))
 
     def _set(self, point: int, value: InputValue) -> None:
         assert isinstance(self.discrete, DiscreteInputs)

@@ -14,7 +14,7 @@ Every TES-specific call of the face is in this file.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from functools import partial
 from pathlib import Path
 
@@ -27,11 +27,18 @@ from fieldtwin.devices.face import (
     FaultParam,
     Input,
     InputValue,
+    Output,
+    OutputValue,
     Port,
+    PortKind,
     PortState,
     SignalSpec,
+    Stream,
     TesAddress,
+    active_faults,
+    applicable,
     pick_fault,
+    read_outputs,
 )
 from fieldtwin.devices.kind import Build, DeviceKind
 from fieldtwin.devices.schema import Key, Schema, Table
@@ -47,6 +54,38 @@ from fieldtwin.tes.models import MODELS
 from fieldtwin.words import format_hex, parse_word
 
 GROUP = "modbus"  # TES on one endpoint share one line
+
+# The kinds of port a TES is reached through (by the endpoint's scheme) and the line
+# faults that mean something there: a CRC or a broken character exists only where RTU
+# frames travel; a connection to drop only where TCP carries them.
+RTU_FAULTS = ("bad_crc", "broken_character")
+TCP_FAULTS = ("drop_connections",)
+MODBUS_TCP = PortKind("Modbus TCP", TCP_FAULTS)
+RTU_OVER_TCP = PortKind("RTU over TCP", RTU_FAULTS + TCP_FAULTS)
+RTU_LINE = PortKind("RTU line", RTU_FAULTS)
+IN_MEMORY = PortKind("in-memory line", RTU_FAULTS)  # an RtuLine in the same process (tests)
+PORT_KINDS = {
+    "tcp": MODBUS_TCP,
+    "rtu+tcp": RTU_OVER_TCP,
+    "pty": RTU_LINE,
+    "serial": RTU_LINE,
+    "memory": IN_MEMORY,
+}
+LINE_FAULTS = RTU_FAULTS + TCP_FAULTS
+
+
+def port_kind(endpoint: str) -> PortKind:
+    """The kind of port an endpoint URL is (``tcp://...``: Modbus TCP)."""
+    scheme = endpoint.split("://", 1)[0] if "://" in endpoint else endpoint.split("?", 1)[0]
+    return PORT_KINDS.get(scheme.strip().lower(), RTU_LINE)
+
+
+def kinds_carrying(fault: str) -> tuple[str, ...]:
+    """The port kinds a line fault applies to; () for a fault of the TES itself."""
+    if fault not in LINE_FAULTS:
+        return ()
+    kinds = (MODBUS_TCP, RTU_OVER_TCP, RTU_LINE)
+    return tuple(k.name for k in kinds if fault in k.line_faults)
 
 
 class TesRegisters:
@@ -117,6 +156,8 @@ class TesDevice:
             leds=tuple(tes.leds.items()),
             ports=(PortState(self.link.value, self.endpoint),),
             details=details,
+            active_faults=active_faults(self.faults()),
+            outputs=read_outputs(self.outputs()),
         )
 
     # --- inputs ---------------------------------------------------------------
@@ -182,7 +223,11 @@ class TesDevice:
     # --- faults -----------------------------------------------------------------
 
     def faults(self) -> Mapping[str, Fault]:
-        """The TES core's fault catalogue for this model (docs/tes.md, "Faults")."""
+        """The faults that apply to this TES on its port (docs/tes.md, "Faults")."""
+        return applicable(self.every_fault(), self.ports())
+
+    def every_fault(self) -> dict[str, Fault]:
+        """The TES core's fault catalogue for this model, whatever its port."""
         tes = self.tes
         return {
             spec.name: Fault(
@@ -191,12 +236,17 @@ class TesDevice:
                 partial(self._inject, spec.name),
                 spec.params,
                 partial(self._inject_with, spec.name) if spec.params else None,
+                state=partial(self._in_force, spec.name),
+                port_kinds=kinds_carrying(spec.name),
             )
             for spec in fault_catalogue(tes.model).values()
         }
 
     def fault(self, name: str) -> Fault:
-        return pick_fault(self, name)
+        return pick_fault(self, name, self.every_fault())
+
+    def _in_force(self, name: str) -> Mapping[str, FaultParam] | None:
+        return self.tes.active_faults().get(name)
 
     def _inject(self, name: str, on: bool) -> None:
         self.tes.inject_fault(name, on)
@@ -204,11 +254,42 @@ class TesDevice:
     def _inject_with(self, name: str, on: bool, params: Mapping[str, FaultParam]) -> None:
         self.tes.inject_fault(name, on, **params)
 
+    # --- outputs ----------------------------------------------------------------
+
+    def outputs(self) -> Mapping[str, Output]:
+        """Digital outputs ``0``..; analog outputs ``a4``.. in volts or milliamps (§4.3.1),
+        with the word the master wrote beside."""
+        model = self.tes.model
+        found = {
+            str(i): Output(str(i), "digital", partial(self._digital_out, i))
+            for i in range(model.digital_outputs)
+        }
+        unit = model.analog_range.unit
+        found.update(
+            {
+                f"a{k}": Output(f"a{k}", f"analog, {unit}", partial(self._analog_out, k))
+                for k in model.analog_outputs
+            }
+        )
+        return found
+
+    def _digital_out(self, i: int) -> OutputValue:
+        return OutputValue(str(i), self.tes.digital_output(i))
+
+    def _analog_out(self, k: int) -> OutputValue:
+        tes = self.tes
+        unit = tes.model.analog_range.unit
+        volts = round(tes.analog_output(k), 4) if tes.powered else 0.0
+        return OutputValue(f"a{k}", volts, unit, tes.analog_output_word(k))
+
+    def streams(self) -> Sequence[Stream]:
+        return ()  # its register writes are published by the endpoint's wiretap
+
     def objects(self) -> TesRegisters:
         return TesRegisters(self.tes)
 
     def ports(self) -> list[Port]:
-        return [Port(self.link.value, self.endpoint, GROUP)]
+        return [Port(self.link.value, self.endpoint, GROUP, port_kind(self.endpoint))]
 
     def label(self) -> str:
         """``TES 1 TES 32EST``: the slave number, then the model (endpoint in status lines)."""
