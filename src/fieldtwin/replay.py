@@ -25,7 +25,7 @@ from fieldtwin.control.resources import Control
 from fieldtwin.errors import FieldtwinError
 from fieldtwin.plant import Plant, PlantFile, build_plant, embedded_plant, read_plant
 from fieldtwin.runtime.binder import ALL, bind
-from fieldtwin.runtime.recfile import RecordingError
+from fieldtwin.runtime.recfile import RecordingError, extent
 from fieldtwin.runtime.recfile import records as numbered_records
 from fieldtwin.runtime.record import (
     INPUTS,
@@ -103,7 +103,7 @@ def replay(path: str | Path, plant_path: str | Path | None = None) -> Outcome:
                 plant_file = read_plant(plant_path)
             wall_clock = SystemWall()
             started = wall_clock.monotonic()
-            sim_us = _play(header, plant_file, feed, comparer, wall_clock)
+            runner = _play(header, plant_file, feed, comparer, wall_clock, extent(path))
             wall = wall_clock.monotonic() - started
         difference = None if feed.failure is not None else comparer.finish()
     finally:
@@ -111,13 +111,20 @@ def replay(path: str | Path, plant_path: str | Path | None = None) -> Outcome:
         expected.close()
     if feed.failure is not None:
         raise feed.failure
+    text = None if difference is None else difference.text
+    if text is not None and runner.overrun is not None:
+        line, asked = runner.overrun
+        text += (
+            f"\n(the replay stopped at the recording's end, t = {runner.limit_us / 1e6:.6f} s:"
+            f" the command of line {line} asked to run to t = {asked / 1e6:g} s)"
+        )
     return Outcome(
         difference is None,
-        None if difference is None else difference.text,
+        text,
         comparer.expected,
         comparer.produced,
         feed.count,
-        sim_us,
+        runner.clock.now,
         wall,
     )
 
@@ -134,10 +141,11 @@ def confined_plant(header: Header, where: str, directory: Path) -> PlantFile:
         name = PurePosixPath(value)
         if name.is_absolute() or ".." in name.parts:
             raise RecordingError(
-                f"{where}: line 1: the recorded plant's {key} = {value[:80]!r} names a"
-                " file outside the replay's folder, and the recording does not embed it"
-                " (a replay reads and writes only the files a recording embeds; replay"
-                " against a plant file of yours with --plant)"
+                f"{where}: line 1: the recorded plant's {key} = {value[:80]!r} is a path"
+                " outside the replay's folder (absolute, or with '..') that the recording"
+                " does not embed: refused (a replay reads and writes only its own folder"
+                " and the files the recording embeds; to replay against a plant file of"
+                " yours, give it with --plant)"
             )
     return plant_file
 
@@ -159,9 +167,10 @@ def _play(
     feed: Feed,
     out: Comparer,
     wall: SystemWall,
-) -> int:
+    limit_us: int,
+) -> ReplayRunner:
     clock = ReplayClock()
-    runner = ReplayRunner(clock, header.speed, feed, wall)
+    runner = ReplayRunner(clock, header.speed, feed, wall, limit_us)
     runner.out = out
     with Wiring():
         plant = build_plant(plant_file, runner=runner, speed=header.speed)
@@ -177,7 +186,7 @@ def _play(
             sampler.close()
         finally:
             plant.close()
-    return clock.now
+    return runner
 
 
 class _Dispatcher:
@@ -229,6 +238,7 @@ class _Dispatcher:
 
     def _command(self, line: int, what: str, label: str, run: Callable[[], object]) -> None:
         feed = self.runner.feed
+        self.runner.command_lines.append(line)
         try:
             answer = plain_json(run())
         except FieldtwinError as exc:
@@ -240,6 +250,8 @@ class _Dispatcher:
             # arguments of a kind the API's schema would have refused
             feed.refuse(line, f"{what}: refused ({type(exc).__name__}: {str(exc)[:200]})")
             return
+        finally:
+            self.runner.command_lines.pop()
         if feed.failure is not None:  # refused while it ran (its own run, a later line)
             return
         self.runner.take_ret()

@@ -401,6 +401,26 @@ def header_data(path: str | Path) -> dict[str, Any]:
         stream.close()
 
 
+def extent(path: str | Path) -> int:
+    """The time of the recording's last record (its end): a replay never runs past it.
+    Only the last line is parsed; a damage is left to the streams that read it."""
+    last = b""
+    stream = lines(path)
+    try:
+        for number, line in stream:
+            if number > 1:
+                last = line
+    finally:
+        stream.close()
+    try:
+        item = json.loads(last) if last.count(b"[") <= MAX_DEPTH else None
+    except (ValueError, RecursionError):
+        item = None
+    if isinstance(item, list) and len(item) > 1 and _is_int(item[1]):
+        return max(0, min(int(item[1]), MAX_SIM_US))
+    return MAX_SIM_US
+
+
 def records(
     path: str | Path, kinds: Collection[str] | None = None
 ) -> Generator[tuple[int, Record], None, None]:
@@ -432,6 +452,7 @@ __all__ = [
     "Checker",
     "RecordingError",
     "check_header",
+    "extent",
     "header_data",
     "lines",
     "parse",

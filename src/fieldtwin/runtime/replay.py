@@ -125,9 +125,13 @@ class ReplayRunner(Runner):
         speed: float | None,
         inputs: Feed | Iterable[Record],
         wall: WallClock | None = None,
+        limit_us: int = MAX_SIM_US,
     ) -> None:
         super().__init__(clock, speed, wall=wall, report=lambda text: None)
         self.replay_clock = clock
+        self.limit_us = limit_us  # the clock never runs past it (the recording's end)
+        self.overrun: tuple[int, int] | None = None  # (line, t_us) of a run cut there
+        self.command_lines: list[int] = []  # the lines of the commands running (nested)
         self.feed = inputs if isinstance(inputs, Feed) else Feed.of(inputs)
         self.out: Outputs = []  # or a Comparer: what the replay produces goes there
         self.dispatch: Dispatch | None = None  # commands and binds (fieldtwin.replay)
@@ -190,15 +194,21 @@ class ReplayRunner(Runner):
         if self.feed.head is not None and self.feed.head[0] == "ret":
             self.feed.take()
 
+    @property
+    def stopping(self) -> bool:
+        """A stop is asked, or the replay has reached the recording's end (a console's
+        stepped ``advance`` asks this between its steps)."""
+        return self._stopping or self.overrun is not None
+
     def _run(self, end: int | None, predicate: Callable[[], bool] | None) -> None:
         feed = self.feed
-        if end is not None and end > MAX_SIM_US:  # a command asks for years: refused
-            feed.refuse(
-                feed.line,
-                f"a command runs the clock to t = {end / 1e6:g} s, past the bound of a"
-                f" replay ({MAX_SIM_US // 1_000_000} s: 7 days of simulated time)",
-            )
-            return
+        if end is not None and end > self.limit_us:
+            # the recorded plant never ran past its end record: a command asking for more
+            # (advance 1e9, a wait a changed plant never ends) stops there, and says so
+            if self.overrun is None:
+                line = self.command_lines[-1] if self.command_lines else feed.line
+                self.overrun = (line, end)
+            end = self.limit_us
         outer = self._stopping
         self._stopping = False
         try:
