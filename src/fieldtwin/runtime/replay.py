@@ -196,12 +196,14 @@ class ReplayRunner(Runner):
 
     @property
     def stopping(self) -> bool:
-        """A stop is asked, or the replay has reached the recording's end (a console's
-        stepped ``advance`` asks this between its steps)."""
-        return self._stopping or self.overrun is not None
+        """A stop is asked, the replay has reached the recording's end or is refused (a
+        console's stepped ``advance`` asks this between its steps)."""
+        return self._stopping or self.overrun is not None or self.feed.failure is not None
 
     def _run(self, end: int | None, predicate: Callable[[], bool] | None) -> None:
         feed = self.feed
+        if feed.failure is not None:  # refused: the plant runs no more
+            return
         if end is not None and end > self.limit_us:
             # the recorded plant never ran past its end record: a command asking for more
             # (advance 1e9, a wait a changed plant never ends) stops there, and says so
