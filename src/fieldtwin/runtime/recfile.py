@@ -15,8 +15,9 @@ checked before anything is built from it.
   bound: a longer one is "not JSON");
 * every record has the fields of its kind, of their types (``RECORD_FORMS``);
 * times are whole microseconds from 0 to ``MAX_SIM_US`` (7 days of simulated
-  time), never going back from one record to the next; an input's ``fired``
-  count never goes back either; nothing follows the ``end`` record;
+  time), never going back from one record to the next (in a replay's two streams,
+  from one input to the next and from one output to the next); an input's
+  ``fired`` count never goes back either; nothing follows the ``end`` record;
 * the header has the fields ``HEADER_FIELDS`` and no other (an unknown field is
   refused by name: a newer fieldtwin's recording is not half understood), the
   plant text and each embedded file bounded, file names plain, file contents
@@ -174,6 +175,15 @@ _DEM_CHANGE: tuple[Field, ...] = (
 _DEM_OTHER = (*_DEM_CHANGE[:3], ("words", "JSON", _anything), _DEM_CHANGE[5])
 
 
+_FORMS: dict[str, tuple[bool, tuple[Field, ...], int]] = {
+    kind: (is_input, fields, 3 if is_input else 2)
+    for kind, (is_input, fields) in {**RECORD_FORMS, "dem": (False, _DEM_CHANGE)}.items()
+}
+_DEM_OTHER_FORM = (False, _DEM_OTHER, 2)
+KNOWN_KINDS = frozenset(_FORMS)
+_decode = json.JSONDecoder().decode
+
+
 def _form(kind: str, is_input: bool, fields: tuple[Field, ...]) -> str:
     names = ["t_us", *(["fired"] if is_input else []), *(f[0] for f in fields)]
     return json.dumps(kind) + ", " + ", ".join(names)
@@ -192,19 +202,17 @@ class Checker:
         return RecordingError(f"{self.where}: line {number}: {text}")
 
     def check(self, item: object, number: int) -> Record:
-        if not isinstance(item, list) or not item or not isinstance(item[0], str):
+        if type(item) is not list or not item or type(item[0]) is not str:
             raise self.fail(number, 'not a record (a JSON array ["kind", t_us, ...])')
         kind = item[0]
         if self.ended:
             raise self.fail(number, f"a {kind[:32]!r} record after the end record")
-        if kind == "dem":
-            is_input = False
-            fields = _DEM_CHANGE if len(item) > 4 and item[4] == "change" else _DEM_OTHER
-        elif kind in RECORD_FORMS:
-            is_input, fields = RECORD_FORMS[kind]
-        else:
+        form = _FORMS.get(kind)
+        if form is None:
             raise self.fail(number, f"unknown record {kind[:32]!r}")
-        head = 3 if is_input else 2
+        if kind == "dem" and len(item) > 4 and item[4] != "change":
+            form = _DEM_OTHER_FORM
+        is_input, fields, head = form
         if len(item) != head + len(fields):
             raise self.fail(
                 number,
@@ -212,7 +220,7 @@ class Checker:
                 f" [{_form(kind, is_input, fields)}], not {len(item)}",
             )
         t_us = item[1]
-        if not _is_int(t_us) or not 0 <= t_us <= MAX_SIM_US:
+        if type(t_us) is not int or not 0 <= t_us <= MAX_SIM_US:
             raise self.fail(
                 number,
                 f"time {_short(t_us)} is not a whole number of microseconds from 0 to"
@@ -224,9 +232,10 @@ class Checker:
                 f"time {t_us} us is before the previous record's ({self.t_us} us):"
                 " records are in time order",
             )
+        self.t_us = t_us
         if is_input:
             fired = item[2]
-            if not _is_int(fired) or not 0 <= fired <= MAX_FIRED:
+            if type(fired) is not int or not 0 <= fired <= MAX_FIRED:
                 raise self.fail(number, f"fired {_short(fired)} is not a count of clock events")
             if fired < self.fired:
                 raise self.fail(
@@ -235,10 +244,12 @@ class Checker:
                     " clock events never run backwards",
                 )
             self.fired = fired
-        self.t_us = t_us
-        for (name, what, ok), value in zip(fields, item[head:], strict=True):
+        index = head
+        for name, what, ok in fields:
+            value = item[index]
             if not ok(value):
                 raise self.fail(number, f"a {kind!r} record's {name} {_short(value)} is not {what}")
+            index += 1
         if kind == "end":
             self.ended = True
         return item
@@ -383,7 +394,7 @@ def parse(line: bytes, where: str, number: int) -> object:
             elif mark in (b"]", b"}"):
                 depth -= 1
     try:
-        return json.loads(line)
+        return _decode(line.decode("utf-8"))
     except (ValueError, RecursionError):  # JSONDecodeError, UnicodeDecodeError among them
         raise RecordingError(f"{where}: line {number}: not JSON (damaged recording)") from None
 
@@ -424,15 +435,25 @@ def extent(path: str | Path) -> int:
 def records(
     path: str | Path, kinds: Collection[str] | None = None
 ) -> Generator[tuple[int, Record], None, None]:
-    """(line number, record) after the header, every record checked (of ``kinds`` only,
-    when given; the others are checked too)."""
+    """(line number, record) after the header, every record checked.
+
+    With ``kinds``, only the records of those kinds (and ``end``) are parsed and
+    checked, the times in order among them: a replay reads the inputs and the outputs
+    as two streams, each checking its half.  A line whose kind is not plain to see
+    (``["data",...`` as fieldtwin writes it) is parsed and checked in every stream."""
     where = str(path)
     checker = Checker(where)
+    wanted = None if kinds is None else frozenset(kinds) | {"end"}
     stream = lines(path)
     try:
         for number, line in stream:
             if number == 1:
                 continue
+            if wanted is not None and line[:2] == b'["':
+                close = line.find(b'"', 2, 16)
+                kind = line[2:close].decode("latin-1") if close > 0 else ""
+                if kind in KNOWN_KINDS and kind not in wanted:
+                    continue  # the other stream's to check
             record = checker.check(parse(line, where, number), number)
             if kinds is None or record[0] in kinds:
                 yield number, record

@@ -227,6 +227,8 @@ class ReplayRunner(Runner):
                     continue
                 if not self._reach(record[1], record[2], predicate):
                     return
+                if feed.head is not record:  # refused on the way (a damaged output line)
+                    continue
                 self._deliver_record(feed.take())
             if end is not None and not self._stopping and feed.failure is None:
                 self._reach(end, None, predicate)
