@@ -13,18 +13,21 @@ difference shown in context, 2 for a file that is not a recording.
 from __future__ import annotations
 
 import argparse
+import inspect
 import tempfile
-from collections.abc import Sequence
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 from typing import Any
 
 from fieldtwin.clock import MS
 from fieldtwin.console import Console
 from fieldtwin.control.resources import Control
-from fieldtwin.errors import ConfigError, FieldtwinError
+from fieldtwin.errors import FieldtwinError
 from fieldtwin.plant import Plant, PlantFile, build_plant, embedded_plant, read_plant
-from fieldtwin.runtime.binder import bind
+from fieldtwin.runtime.binder import ALL, bind
+from fieldtwin.runtime.recfile import RecordingError, extent
+from fieldtwin.runtime.recfile import records as numbered_records
 from fieldtwin.runtime.record import (
     INPUTS,
     OUTPUTS,
@@ -36,7 +39,7 @@ from fieldtwin.runtime.record import (
     plain_json,
     read_header,
 )
-from fieldtwin.runtime.replay import Comparer, ReplayClock, ReplayRunner
+from fieldtwin.runtime.replay import Comparer, Feed, ReplayClock, ReplayRunner
 from fieldtwin.runtime.wall import SystemWall
 from fieldtwin.transports.virtual import Wiring
 
@@ -83,43 +86,92 @@ class Outcome:
 def replay(path: str | Path, plant_path: str | Path | None = None) -> Outcome:
     """Replay the recording ``path`` (against ``plant_path`` when given).
 
-    Two passes over the file: the inputs (and the end) first, then the recorded
-    outputs, compared one by one as the replay produces them."""
+    Two streams over the file, side by side: the inputs (and the end), delivered as
+    the replay reaches them, and the recorded outputs, compared one by one as the
+    replay produces them; neither is ever held whole.  A recording is untrusted input
+    (fieldtwin.runtime.recfile): anything out of its bounds refuses the replay with
+    a ConfigError naming the file and the line."""
+    where = str(path)
     header = read_header(path)
-    inputs = list(iter_records(path, INPUTS | {"end"}))
-    end = inputs.pop() if inputs and inputs[-1][0] == "end" else None
-    comparer = Comparer(iter_records(path, OUTPUTS))
-    with tempfile.TemporaryDirectory(prefix="fieldtwin-replay-") as tmp:
-        if plant_path is None:
-            plant_file = embedded_plant(header, str(path), Path(tmp))
-        else:
-            plant_file = read_plant(plant_path)
-        wall_clock = SystemWall()
-        started = wall_clock.monotonic()
-        sim_us = _play(header, plant_file, inputs, end, comparer, wall_clock)
-        wall = wall_clock.monotonic() - started
-    difference = comparer.finish()
+    feed = Feed(numbered_records(path, INPUTS | {"end"}), where)
+    expected = iter_records(path, OUTPUTS)
+    comparer = Comparer(expected, on_error=feed.fail)
+    try:
+        with tempfile.TemporaryDirectory(prefix="fieldtwin-replay-") as tmp:
+            if plant_path is None:
+                plant_file = confined_plant(header, where, Path(tmp))
+            else:
+                plant_file = read_plant(plant_path)
+            wall_clock = SystemWall()
+            started = wall_clock.monotonic()
+            runner = _play(header, plant_file, feed, comparer, wall_clock, extent(path))
+            wall = wall_clock.monotonic() - started
+        difference = None if feed.failure is not None else comparer.finish()
+    finally:
+        feed.close()
+        expected.close()
+    if feed.failure is not None:
+        raise feed.failure
+    text = None if difference is None else difference.text
+    if text is not None and runner.overrun is not None:
+        line, asked = runner.overrun
+        text += (
+            f"\n(the replay stopped at the recording's end, t = {runner.limit_us / 1e6:.6f} s:"
+            f" the command of line {line} asked to run to t = {asked / 1e6:g} s)"
+        )
     return Outcome(
         difference is None,
-        None if difference is None else difference.text,
+        text,
         comparer.expected,
         comparer.produced,
-        len(inputs),
-        sim_us,
+        feed.count,
+        runner.clock.now,
         wall,
     )
+
+
+def confined_plant(header: Header, where: str, directory: Path) -> PlantFile:
+    """The plant a recording embeds, its files written into ``directory``, confined
+    there: a value that would name a file outside it (an absolute path, a ``..``) and
+    that the recording does not embed is refused, so a replay reads and writes only
+    its own temporary folder and fieldtwin's own programs."""
+    plant_file = embedded_plant(header, where, directory)
+    for key, value in _strings(plant_file.data, ""):
+        if "://" in value:  # an endpoint (tcp://, serial:///dev/...): a replay opens none
+            continue
+        name = PurePosixPath(value)
+        if name.is_absolute() or ".." in name.parts:
+            raise RecordingError(
+                f"{where}: line 1: the recorded plant's {key} = {value[:80]!r} is a path"
+                " outside the replay's folder (absolute, or with '..') that the recording"
+                " does not embed: refused (a replay reads and writes only its own folder"
+                " and the files the recording embeds; to replay against a plant file of"
+                " yours, give it with --plant)"
+            )
+    return plant_file
+
+
+def _strings(value: object, key: str) -> Iterator[tuple[str, str]]:
+    if isinstance(value, str):
+        yield key, value
+    elif isinstance(value, Mapping):
+        for name, item in value.items():
+            yield from _strings(item, f"{key}.{name}" if key else str(name))
+    elif isinstance(value, list):
+        for index, item in enumerate(value):
+            yield from _strings(item, f"{key}[{index}]")
 
 
 def _play(
     header: Header,
     plant_file: PlantFile,
-    inputs: Sequence[Record],
-    end: Record | None,
+    feed: Feed,
     out: Comparer,
     wall: SystemWall,
-) -> int:
+    limit_us: int,
+) -> ReplayRunner:
     clock = ReplayClock()
-    runner = ReplayRunner(clock, header.speed, inputs, wall)
+    runner = ReplayRunner(clock, header.speed, feed, wall, limit_us)
     runner.out = out
     with Wiring():
         plant = build_plant(plant_file, runner=runner, speed=header.speed)
@@ -129,17 +181,21 @@ def _play(
             control = Control(plant, runner, plant.events)
             runner.dispatch = _Dispatcher(plant, runner, control, header.console)
             runner.play()
-            if end is not None:
-                runner.finish(end[1], end[2])
+            if feed.end is not None:
+                runner.finish(feed.end[1], feed.end[2])
             chars.close()
             sampler.close()
         finally:
             plant.close()
-    return clock.now
+    return runner
 
 
 class _Dispatcher:
-    """Binds, control calls and console lines of a recording, on the replayed plant."""
+    """Binds, control calls and console lines of a recording, on the replayed plant.
+
+    What a recording asks that the plant cannot do (an unknown command, arguments
+    of the wrong kind, a port group that does not exist) refuses the replay, naming
+    the line (``feed.refuse``): nothing is raised through the plant's own code."""
 
     def __init__(
         self, plant: Plant, runner: ReplayRunner, control: Control, console: str = "inline"
@@ -149,29 +205,63 @@ class _Dispatcher:
         self.control = control
         # console lines run as they ran when recorded (the header's console): the
         # control API's console (modes) or a Python session's (inline)
-        self.console = control.console if console == "modes" else Console(plant, files=False)
+        self.console = (
+            control.console
+            if console == "modes"
+            else Console(plant, files=False, interrupted=lambda: runner.stopping)
+        )
 
     def __call__(self, record: Record) -> None:
-        kind = record[0]
+        kind, feed = record[0], self.runner.feed
+        line = feed.line
         if kind == "bind":
             groups = tuple(str(g) for g in record[3])
-            self.plant.bindings.append(
-                bind(self.plant.devices, self.runner, groups=groups, events=self.plant.events)
-            )
+            unknown = sorted(set(groups) - set(ALL))
+            if unknown:
+                feed.refuse(line, f"bind: unknown port group(s) {unknown} (allowed: {ALL})")
+                return
+            try:
+                binding = bind(
+                    self.plant.devices, self.runner, groups=groups, events=self.plant.events
+                )
+            except FieldtwinError as exc:
+                feed.refuse(line, f"bind: {exc}")
+                return
+            self.plant.bindings.append(binding)
         elif kind == "call":
             name, args = str(record[3]), list(record[4])
             if name not in CONTROL_COMMANDS:
-                raise ConfigError(f"recording: {name!r} is not a recorded control command")
-            self._command(name, lambda: getattr(self.control, name)(*args))
+                feed.refuse(line, f"{name[:40]!r} is not a recorded control command")
+                return
+            method = getattr(self.control, name)
+            try:
+                inspect.signature(method).bind(*args)
+            except TypeError as exc:
+                feed.refuse(line, f"control {name}: {exc} ({len(args)} arguments recorded)")
+                return
+            self._command(line, f"control {name}", name, lambda: method(*args))
         elif kind == "line":
-            line = str(record[3])
-            self._command("console", lambda: self.console.execute(line))
+            text = str(record[3])
+            self._command(line, "console line", "console", lambda: self.console.execute(text))
 
-    def _command(self, label: str, run: Any) -> None:
+    def _command(self, line: int, what: str, label: str, run: Callable[[], object]) -> None:
+        feed = self.runner.feed
+        self.runner.command_lines.append(line)
         try:
             answer = plain_json(run())
         except FieldtwinError as exc:
             answer = {"error": str(exc)}
+        except RecursionError:
+            feed.refuse(line, f"{what}: nested too deeply")
+            return
+        except (TypeError, ValueError, ArithmeticError, LookupError, AttributeError) as exc:
+            # arguments of a kind the API's schema would have refused
+            feed.refuse(line, f"{what}: refused ({type(exc).__name__}: {str(exc)[:200]})")
+            return
+        finally:
+            self.runner.command_lines.pop()
+        if feed.failure is not None:  # refused while it ran (its own run, a later line)
+            return
         self.runner.take_ret()
         self.runner.out.append(["result", self.runner.clock.now, label, answer])
 
@@ -230,4 +320,4 @@ def run_diff(args: argparse.Namespace) -> int:
     return 1
 
 
-__all__ = ["CONTROL_COMMANDS", "Outcome", "diff", "replay"]
+__all__ = ["CONTROL_COMMANDS", "Outcome", "confined_plant", "diff", "replay"]

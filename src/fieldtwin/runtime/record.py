@@ -41,9 +41,7 @@ from __future__ import annotations
 
 import gzip
 import json
-import zlib
-from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from collections.abc import Callable, Collection, Generator, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -55,24 +53,28 @@ from fieldtwin.devices.module import ModuleDevice, PlcObjects
 from fieldtwin.devices.tes import TesDevice
 from fieldtwin.errors import ConfigError, FieldtwinError
 from fieldtwin.runtime.events import Event, EventBus, Subscription
+from fieldtwin.runtime.recfile import (
+    FORMAT,
+    INPUT_KINDS,
+    MAX_HEADER_BYTES,
+    OUTPUT_KINDS,
+    VERSION,
+    MiB,
+    Record,
+    check_header,
+    header_data,
+)
+from fieldtwin.runtime.recfile import records as numbered_records
 from fieldtwin.runtime.runner import CloseCallback, ConnectCallback, DataCallback, Runner
 from fieldtwin.transports.base import Listener, Transport
 from fieldtwin.words import parse_word
 
-FORMAT = "fieldtwin-recording"
-VERSION = 1
-# How the recorded console lines ran (docs/record.md): "inline", a Python session's
-# Console (an advance runs there and then); "modes", the control API's console of
-# `fieldtwin run` (an advance or power break starts a runner mode).
-CONSOLES = ("inline", "modes")
 SAMPLE_MS = 100  # objects and LEDs are looked at this often (simulated ms)
 SAMPLE_PRIORITY = 1 << 30  # after every plant event of the same instant
 MAX_OBJECTS = 4096  # objects one device is looked at for
-MAX_HEADER_BYTES = 64 * 1024 * 1024  # a header line read back (plant text and its files)
-INPUTS = frozenset({"bind", "accept", "data", "close", "call", "line", "ret"})
-OUTPUTS = frozenset({"send", "result", "object", "led", "chars", "dem"})
+INPUTS = INPUT_KINDS
+OUTPUTS = OUTPUT_KINDS
 
-Record = list[Any]
 ORIGINAL_SEND = "_fieldtwin_unrecorded_send"  # where a recorded transport keeps its send
 
 
@@ -87,7 +89,7 @@ class Header:
     sample_ms: int
     version: int = VERSION
     fieldtwin: str = __version__
-    console: str = "inline"  # how its console lines ran: one of CONSOLES
+    console: str = "inline"  # how its console lines ran: one of recfile.CONSOLES
 
     def as_json(self) -> dict[str, object]:
         return {
@@ -102,42 +104,18 @@ class Header:
 
     @classmethod
     def from_json(cls, data: object, where: str) -> Header:
-        if not isinstance(data, dict) or data.get("format") != FORMAT:
-            raise ConfigError(f"{where}: not a fieldtwin recording (no {FORMAT} header)")
-        version = data.get("version")
-        if version != VERSION:
-            raise ConfigError(
-                f"{where}: recording format version {version!r}; this fieldtwin reads"
-                f" version {VERSION}"
-            )
-        plant = data.get("plant")
-        speed = data.get("speed")
-        sample = data.get("sample_ms")
-        if (
-            not isinstance(plant, dict)
-            or not isinstance(plant.get("name"), str)
-            or not isinstance(plant.get("text"), str)
-            or not isinstance(plant.get("files"), dict)
-            or not (speed is None or isinstance(speed, int | float))
-            or not isinstance(sample, int)
-            or sample < 1
-        ):
-            raise ConfigError(f"{where}: the header is damaged (plant, speed or sample_ms)")
-        console = data.get("console", "inline")  # recordings before the field: inline
-        if console not in CONSOLES:
-            raise ConfigError(
-                f"{where}: the header's console {console!r} is not one of {', '.join(CONSOLES)}"
-            )
-        files = {str(k): str(v) for k, v in plant["files"].items()}
+        """The header of a recording, every field checked (fieldtwin.runtime.recfile)."""
+        fields = check_header(data, where)
+        plant, speed = fields["plant"], fields["speed"]
         return cls(
             plant["name"],
             plant["text"],
-            files,
+            dict(plant["files"]),
             None if speed is None else float(speed),
-            sample,
-            version,
-            str(data.get("fieldtwin", "?")),
-            str(console),
+            fields["sample_ms"],
+            fields["version"],
+            fields["fieldtwin"],
+            fields["console"],
         )
 
 
@@ -165,6 +143,13 @@ class RecordWriter:
 
     def __init__(self, path: str | Path, header: Header) -> None:
         self.path = Path(path)
+        size = len(_line(header.as_json()))
+        if size > MAX_HEADER_BYTES:  # a replay would refuse it: say so now
+            raise ConfigError(
+                f"--record {path}: the plant file and the files it names make a header of"
+                f" {size / MiB:.1f} MiB; a recording's header is at most"
+                f" {MAX_HEADER_BYTES // MiB} MiB (docs/record.md)"
+            )
         try:
             self._file: gzip.GzipFile | None = gzip.GzipFile(self.path, "wb", compresslevel=6)
         except OSError as exc:
@@ -174,8 +159,7 @@ class RecordWriter:
 
     def _write(self, item: object) -> None:
         assert self._file is not None
-        line = json.dumps(item, separators=(",", ":"), ensure_ascii=False, default=str)
-        self._file.write(line.encode("utf-8") + b"\n")
+        self._file.write(_line(item))
 
     def add(self, record: Record) -> None:
         if self._file is not None:
@@ -188,48 +172,29 @@ class RecordWriter:
             file.close()
 
 
+def _line(item: object) -> bytes:
+    text = json.dumps(item, separators=(",", ":"), ensure_ascii=False, default=str)
+    return text.encode("utf-8") + b"\n"
+
+
 def read_recording(path: str | Path) -> tuple[Header, list[Record]]:
-    """The header and the records of a recording; errors name the file and the line."""
+    """The header and the records of a recording, whole (a short one: tests, tools);
+    errors name the file and the line."""
     return read_header(path), list(iter_records(path))
 
 
 def read_header(path: str | Path) -> Header:
-    where = str(path)
-    with _reading(where), gzip.open(path, "rb") as file:
-        return Header.from_json(_json(file.readline(MAX_HEADER_BYTES), where, 1), where)
+    return Header.from_json(header_data(path), str(path))
 
 
-def iter_records(path: str | Path, kinds: Collection[str] | None = None) -> Iterator[Record]:
+def iter_records(
+    path: str | Path, kinds: Collection[str] | None = None
+) -> Generator[Record, None, None]:
     """The records after the header, one at a time (of ``kinds`` only, when given): a
-    recording of hours is never held in memory whole."""
-    where = str(path)
-    with _reading(where), gzip.open(path, "rb") as file:
-        file.readline(MAX_HEADER_BYTES)
-        for number, line in enumerate(file, start=2):
-            item = _json(line, where, number)
-            if not isinstance(item, list) or not item or not isinstance(item[0], str):
-                raise ConfigError(f"{where}: line {number}: not a record")
-            if item[0] not in INPUTS and item[0] not in OUTPUTS and item[0] != "end":
-                raise ConfigError(f"{where}: line {number}: unknown record {item[0]!r}")
-            if kinds is None or item[0] in kinds:
-                yield item
-
-
-@contextmanager
-def _reading(where: str) -> Iterator[None]:
-    try:
-        yield
-    except (OSError, zlib.error) as exc:  # gzip.BadGzipFile is an OSError
-        raise ConfigError(f"{where}: cannot read the recording ({exc})") from None
-    except EOFError:
-        raise ConfigError(f"{where}: the recording is cut short (not closed?)") from None
-
-
-def _json(line: bytes, where: str, number: int) -> object:
-    try:
-        return json.loads(line)
-    except (json.JSONDecodeError, UnicodeDecodeError):
-        raise ConfigError(f"{where}: line {number}: not JSON (damaged recording)") from None
+    recording of hours is never held in memory whole.  Every line is checked as
+    untrusted input (fieldtwin.runtime.recfile): bounded, of its kind's form, in time
+    order."""
+    return (record for _, record in numbered_records(path, kinds))
 
 
 # ------------------------------------------------------------------------- sampling
@@ -477,6 +442,7 @@ __all__ = [
     "VERSION",
     "Header",
     "Keys",
+    "Record",
     "RecordWriter",
     "Recorder",
     "Sampler",

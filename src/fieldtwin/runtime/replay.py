@@ -19,12 +19,13 @@ from __future__ import annotations
 
 import json
 from collections import deque
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Protocol
 
 from fieldtwin.clock import SimClock
 from fieldtwin.errors import ConfigError
+from fieldtwin.runtime.recfile import MAX_SIM_US, RecordingError
 from fieldtwin.runtime.record import Keys, Record
 from fieldtwin.runtime.runner import CloseCallback, ConnectCallback, DataCallback, Runner
 from fieldtwin.runtime.wall import WallClock
@@ -55,6 +56,66 @@ class Outputs(Protocol):
     def append(self, record: Record, /) -> None: ...
 
 
+class Feed:
+    """The recorded inputs, one at a time from a stream (never held whole): the next one
+    (``head``, or None once they are all delivered, the end record met, or the replay
+    refused), the end record when met, and the first reason to refuse the recording."""
+
+    def __init__(self, records: Iterable[tuple[int, Record]], where: str = "recording") -> None:
+        self.where = where
+        self._records = iter(records)
+        self.head: Record | None = None
+        self.head_line = 0  # the line of ``head`` in the file
+        self.line = 0  # the line of the input last taken
+        self.count = 0  # inputs taken
+        self.end: Record | None = None
+        self.failure: ConfigError | None = None
+        self._next()
+
+    @classmethod
+    def of(cls, records: Iterable[Record]) -> Feed:
+        """A feed of records held in memory (numbered from 2, as after a header)."""
+        return cls(enumerate(records, start=2))
+
+    def _next(self) -> None:
+        self.head = None
+        if self.failure is not None:
+            return
+        try:
+            found = next(self._records, None)
+            if found is not None and found[1][0] == "end":
+                self.end = found[1]
+                found = next(self._records, None)  # nothing after it (the reader says so)
+        except ConfigError as exc:
+            self.fail(exc)
+            return
+        if found is not None:
+            self.head_line, self.head = found
+
+    def take(self) -> Record:
+        """The next input, taken (``head`` must not be None)."""
+        record = self.head
+        assert record is not None
+        self.line = self.head_line
+        self.count += 1
+        self._next()
+        return record
+
+    def fail(self, error: ConfigError) -> None:
+        """The replay is refused (the first reason is kept): no input is delivered more."""
+        if self.failure is None:
+            self.failure = error
+        self.head = None
+
+    def refuse(self, line: int, text: str) -> None:
+        self.fail(RecordingError(f"{self.where}: line {line}: {text}"))
+
+    def close(self) -> None:
+        close = getattr(self._records, "close", None)
+        if close is not None:
+            close()
+
+
 class ReplayRunner(Runner):
     """A runner fed by recorded inputs (see the module docstring)."""
 
@@ -62,13 +123,16 @@ class ReplayRunner(Runner):
         self,
         clock: ReplayClock,
         speed: float | None,
-        inputs: Sequence[Record],
+        inputs: Feed | Iterable[Record],
         wall: WallClock | None = None,
+        limit_us: int = MAX_SIM_US,
     ) -> None:
         super().__init__(clock, speed, wall=wall, report=lambda text: None)
         self.replay_clock = clock
-        self.inputs = list(inputs)
-        self.pos = 0
+        self.limit_us = limit_us  # the clock never runs past it (the recording's end)
+        self.overrun: tuple[int, int] | None = None  # (line, t_us) of a run cut there
+        self.command_lines: list[int] = []  # the lines of the commands running (nested)
+        self.feed = inputs if isinstance(inputs, Feed) else Feed.of(inputs)
         self.out: Outputs = []  # or a Comparer: what the replay produces goes there
         self.dispatch: Dispatch | None = None  # commands and binds (fieldtwin.replay)
         self.keys = Keys()
@@ -113,43 +177,60 @@ class ReplayRunner(Runner):
 
     def play(self) -> None:
         """Deliver every input, in order (the top level: a stray ``ret`` is passed)."""
-        while self.pos < len(self.inputs):
-            if self.inputs[self.pos][0] == "ret":
-                self.pos += 1
+        feed = self.feed
+        while feed.head is not None:
+            if feed.head[0] == "ret":
+                feed.take()
                 continue
             self._run(None, None)
 
     def finish(self, t_us: int, fired: int | None) -> None:
         """Run on to where the recording ended."""
-        if t_us >= self.clock.now:
+        if t_us >= self.clock.now and self.feed.failure is None:
             self._reach(t_us, fired, None)
 
     def take_ret(self) -> None:
         """A command returned: pass the recording's mark of its return, if it is next."""
-        if self.pos < len(self.inputs) and self.inputs[self.pos][0] == "ret":
-            self.pos += 1
+        if self.feed.head is not None and self.feed.head[0] == "ret":
+            self.feed.take()
+
+    @property
+    def stopping(self) -> bool:
+        """A stop is asked, the replay has reached the recording's end or is refused (a
+        console's stepped ``advance`` asks this between its steps)."""
+        return self._stopping or self.overrun is not None or self.feed.failure is not None
 
     def _run(self, end: int | None, predicate: Callable[[], bool] | None) -> None:
+        feed = self.feed
+        if feed.failure is not None:  # refused: the plant runs no more
+            return
+        if end is not None and end > self.limit_us:
+            # the recorded plant never ran past its end record: a command asking for more
+            # (advance 1e9, a wait a changed plant never ends) stops there, and says so
+            if self.overrun is None:
+                line = self.command_lines[-1] if self.command_lines else feed.line
+                self.overrun = (line, end)
+            end = self.limit_us
         outer = self._stopping
         self._stopping = False
         try:
             while not self._stopping:
                 if predicate is not None and predicate():
                     return
-                if self.pos >= len(self.inputs):
+                record = feed.head
+                if record is None:
                     break
-                record = self.inputs[self.pos]
                 if record[0] == "ret" or (end is not None and record[1] > end):
                     break
                 if record[1] < self.clock.now:  # a changed plant ran past it: at once
-                    self.pos += 1
-                    self._deliver_record(record)
+                    self._deliver_record(feed.take())
                     continue
                 if not self._reach(record[1], record[2], predicate):
                     return
-                self.pos += 1
-                self._deliver_record(record)
-            if end is not None and not self._stopping:
+                if feed.head is not record:  # refused on the way (a damaged output line)
+                    continue
+                self._deliver_record(feed.take())
+            if end is not None and not self._stopping and feed.failure is None:
                 self._reach(end, None, predicate)
         finally:
             self._stopping = outer
@@ -276,9 +357,14 @@ class Comparer:
     only the context of the first difference is kept (bounded memory)."""
 
     def __init__(
-        self, expected: Iterator[Record], *, names: tuple[str, str] = ("recorded", "replayed")
+        self,
+        expected: Iterator[Record],
+        *,
+        names: tuple[str, str] = ("recorded", "replayed"),
+        on_error: Callable[[ConfigError], None] | None = None,
     ) -> None:
         self._expected = expected
+        self._on_error = on_error  # a damaged expected stream: told there, then it ends
         self.names = names
         self.expected = 0  # expected records seen (all of them once finished)
         self.produced = 0
@@ -289,7 +375,14 @@ class Comparer:
         self._after_right: list[Record] = []
 
     def _next(self) -> Record | None:
-        record = next(self._expected, None)
+        try:
+            record = next(self._expected, None)
+        except ConfigError as exc:
+            if self._on_error is None:
+                raise
+            self._on_error(exc)
+            self._expected = iter(())
+            return None
         if record is not None:
             self.expected += 1
         return record
@@ -330,4 +423,4 @@ class Comparer:
         return Difference(index, "\n".join(lines))
 
 
-__all__ = ["Comparer", "Difference", "ReplayClock", "ReplayRunner", "compare", "show"]
+__all__ = ["Comparer", "Difference", "Feed", "ReplayClock", "ReplayRunner", "compare", "show"]
