@@ -268,7 +268,7 @@ def _main(argv: Sequence[str] | None) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from fieldtwin.live import plain_status, render
+    from fieldtwin.live import footer_urls, plain_status, render
     from fieldtwin.plant import build_plant, plant_speed, read_plant
     from fieldtwin.runtime.binder import ALL, bind
     from fieldtwin.runtime.exposure import warnings_for
@@ -314,10 +314,11 @@ def _run(args: argparse.Namespace) -> int:
     )
     if control is not None:  # after the `running` line; the API is up already
         # one bus for every window onto the plant: the API's stream sees the traffic too
-        for line in control.lines:
-            print(line, flush=True)
+        # a moved port (8520 busy) is said before the URL lines it corrects
         for warning in control.warnings:
             print(warning, file=sys.stderr, flush=True)
+        for line in control.lines:
+            print(line, flush=True)
     # the plant lives as long as the process: the cyclic collector need not walk its
     # objects again and again (1000 TES: half the time of an edge; docs/decisions.md)
     gc.collect()
@@ -325,6 +326,7 @@ def _run(args: argparse.Namespace) -> int:
     live = sys.stdout.isatty() and not args.no_live
     end = None if args.duration is None else clock.now + round(args.duration * S)
     next_status = [clock.now]
+    urls = [] if control is None else footer_urls(control.lines)  # the live view's footer
 
     def tick(now: int) -> None:
         if control is not None:
@@ -332,7 +334,7 @@ def _run(args: argparse.Namespace) -> int:
         if end is not None and now >= end:
             runner.stop()
         if live_view is not None:
-            live_view.update(render(plant, endpoints, runner))
+            live_view.update(render(plant, endpoints, runner, urls))
         elif args.status_every > 0 and now >= next_status[0]:
             next_status[0] = now + round(args.status_every * S)
             print("\n".join(plain_status(plant)), flush=True)
@@ -342,7 +344,8 @@ def _run(args: argparse.Namespace) -> int:
         if live:
             from rich.live import Live
 
-            with Live(render(plant, endpoints, runner), refresh_per_second=5) as live_view:
+            view = render(plant, endpoints, runner, urls)
+            with Live(view, refresh_per_second=5) as live_view:
                 runner.run_forever(tick, tick_us=_tick(speed))
         else:
             runner.run_forever(tick, tick_us=_tick(speed))
