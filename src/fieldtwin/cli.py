@@ -67,7 +67,15 @@ def _parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"fieldtwin {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
-    run = sub.add_parser("run", help="bring a plant to life in real time")
+    run = sub.add_parser(
+        "run",
+        help="bring a plant to life in real time",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog="examples:\n"
+        "  fieldtwin run                                  # the embedded default plant, x1\n"
+        "  fieldtwin run examples/tes.toml --speed 10\n"
+        "  fieldtwin run --speed max --duration 60 --no-live --status-every 10",
+    )
     run.add_argument("plant", nargs="?", help="plant file (TOML); default: the embedded plant")
     run.add_argument(
         "--speed",
@@ -88,7 +96,15 @@ def _parser() -> argparse.ArgumentParser:
         help="record the session for `fieldtwin replay` (docs/record.md)",
     )
     _control_options(run)
-    con = sub.add_parser("console", help="the programming terminal")
+    con = sub.add_parser(
+        "console",
+        help="the programming terminal",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog="examples:\n"
+        '  fieldtwin console --speed max -c "advance 12" -c "read IW5,0 IW5,3"\n'
+        "  fieldtwin console examples/aem811.toml --script session.txt\n"
+        '  fieldtwin console --attach $FIELDTWIN_URL -c "faults 5"   # a running plant',
+    )
     con.add_argument("plant", nargs="?", help="plant file (TOML); default: the embedded plant")
     con.add_argument("--script", "-f", help="run commands from this file ('-' = stdin)")
     con.add_argument(
