@@ -503,8 +503,8 @@ def _console(args: argparse.Namespace) -> int:
 
 def _attached(args: argparse.Namespace) -> int:
     """``console --attach URL``: the same commands, run on a running plant."""
-    from fieldtwin.control.attach import interactive, run_remote
-    from fieldtwin.control.client import Client
+    from fieldtwin.control.attach import explain, interactive, run_remote
+    from fieldtwin.control.client import Client, ControlError
 
     if args.plant is not None:
         print(
@@ -524,7 +524,11 @@ def _attached(args: argparse.Namespace) -> int:
             return run_remote(client, lines, sys.stdout, sys.stderr, args.script)
         if args.script == "-" or not sys.stdin.isatty():
             return run_remote(client, sys.stdin, sys.stdout, sys.stderr, "<stdin>")
-        client.plant()  # unreachable: a clear error, status 2
+        try:
+            client.plant()  # unreachable or refused: a clear error, status 2
+        except ControlError as exc:
+            print(f"fieldtwin: {explain(exc, client)}", file=sys.stderr)
+            return 2
         return interactive(client)
 
 
