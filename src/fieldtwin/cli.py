@@ -366,7 +366,8 @@ def _run(args: argparse.Namespace) -> int:
         else:
             runner.run_forever(tick, tick_us=_tick(speed))
     finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)  # the run ended: no forced stop
+        if _HAS_TIMER:
+            signal.setitimer(signal.ITIMER_REAL, 0)  # the run ended: no forced stop
         for number in (signal.SIGTERM, signal.SIGINT):  # closing: a signal cuts it short
             signal.signal(number, _interrupt)
         final = [] if live else plain_status(plant)  # the plant as it stopped (issue 10 item 21)
@@ -380,6 +381,9 @@ def _run(args: argparse.Namespace) -> int:
 
 
 STOP_GRACE_S = 1.5  # after SIGTERM/SIGINT, the most wall time the run has to end by itself
+
+
+_HAS_TIMER = hasattr(signal, "setitimer") and hasattr(signal, "SIGALRM")  # not on Windows
 
 
 def _interrupt(*_: object) -> None:
@@ -397,9 +401,11 @@ def stop_on_signals(runner: Runner) -> None:
         if runner.stopping:
             _interrupt()
         runner.stop()
-        signal.setitimer(signal.ITIMER_REAL, STOP_GRACE_S)
+        if _HAS_TIMER:  # POSIX; elsewhere a second Ctrl-C cuts the run short
+            signal.setitimer(signal.ITIMER_REAL, STOP_GRACE_S)
 
-    signal.signal(signal.SIGALRM, _interrupt)
+    if _HAS_TIMER:
+        signal.signal(signal.SIGALRM, _interrupt)
     signal.signal(signal.SIGTERM, stop)
     signal.signal(signal.SIGINT, stop)
 
