@@ -84,6 +84,9 @@ def _codes(code: types.CodeType) -> Iterator[types.CodeType]:
 def _starts_something(func: Any, seen: set[int], depth: int = 0) -> bool:
     """Does ``func`` (or what it calls in its module) name a process/socket starter?"""
     func = inspect.unwrap(getattr(func, "__func__", func))
+    inner = getattr(getattr(func, "hypothesis", None), "inner_test", None)
+    if inner is not None:  # a @given test: look at the test itself
+        func = inspect.unwrap(inner)
     code = getattr(func, "__code__", None)
     if code is None or id(code) in seen or depth > MAX_DEPTH:
         return False
