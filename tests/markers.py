@@ -224,8 +224,8 @@ def pytest_terminal_summary(terminalreporter: Any, config: pytest.Config) -> Non
         tools = sorted(skipped)
         count = sum(skipped.values())
         terminalreporter.write_line(
-            f"{count} tests skipped: missing {', '.join(tools)}; install with"
-            f" `sudo apt-get install -y {' '.join(tools)}` (make test does it when run as"
-            " root on Debian; with CI=true they fail instead)",
+            f"{count} test{'' if count == 1 else 's'} skipped: missing {', '.join(tools)};"
+            f" install with `sudo apt-get install -y {' '.join(tools)}` (make test does it"
+            " when run as root on Debian; with CI=true they fail instead)",
             yellow=True,
         )
