@@ -16,4 +16,4 @@ settings.register_profile(
 settings.load_profile("fieldtwin")
 
 # pytester: tests/plugin runs fieldtwin's pytest plugin in fresh projects.
-pytest_plugins = ["pytester"]
+pytest_plugins = ["pytester", "tests.markers"]

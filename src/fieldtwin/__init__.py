@@ -49,4 +49,24 @@ if not any(isinstance(f, _MovedFinder) for f in sys.meta_path):
     sys.meta_path.append(_MovedFinder())
 
 __all__ = ["MOVED", "ConfigError", "FieldtwinError", "ProtocolError", "TransportError"]
-__version__ = "0.1.0"
+
+
+def _version() -> str:
+    """The version, from one place: pyproject.toml (the installed distribution's
+    metadata; in a checkout not installed, the file itself)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("fieldtwin")
+    except PackageNotFoundError:
+        import tomllib
+        from pathlib import Path
+
+        pyproject = Path(__file__).resolve().parents[2] / "pyproject.toml"
+        try:
+            return str(tomllib.loads(pyproject.read_text("utf-8"))["project"]["version"])
+        except (OSError, KeyError, tomllib.TOMLDecodeError):
+            return "0+unknown"
+
+
+__version__ = _version()

@@ -67,7 +67,15 @@ def _parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"fieldtwin {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
-    run = sub.add_parser("run", help="bring a plant to life in real time")
+    run = sub.add_parser(
+        "run",
+        help="bring a plant to life in real time",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog="examples:\n"
+        "  fieldtwin run                                  # the embedded default plant, x1\n"
+        "  fieldtwin run examples/tes.toml --speed 10\n"
+        "  fieldtwin run --speed max --duration 60 --no-live --status-every 10",
+    )
     run.add_argument("plant", nargs="?", help="plant file (TOML); default: the embedded plant")
     run.add_argument(
         "--speed",
@@ -88,7 +96,15 @@ def _parser() -> argparse.ArgumentParser:
         help="record the session for `fieldtwin replay` (docs/record.md)",
     )
     _control_options(run)
-    con = sub.add_parser("console", help="the programming terminal")
+    con = sub.add_parser(
+        "console",
+        help="the programming terminal",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog="examples:\n"
+        '  fieldtwin console --speed max -c "advance 12" -c "read IW5,0 IW5,3"\n'
+        "  fieldtwin console examples/aem811.toml --script session.txt\n"
+        '  fieldtwin console --attach $FIELDTWIN_URL -c "faults 5"   # a running plant',
+    )
     con.add_argument("plant", nargs="?", help="plant file (TOML); default: the embedded plant")
     con.add_argument("--script", "-f", help="run commands from this file ('-' = stdin)")
     con.add_argument(
@@ -268,7 +284,7 @@ def _main(argv: Sequence[str] | None) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from fieldtwin.live import plain_status, render
+    from fieldtwin.live import footer_urls, plain_status, render
     from fieldtwin.plant import build_plant, plant_speed, read_plant
     from fieldtwin.runtime.binder import ALL, bind
     from fieldtwin.runtime.exposure import warnings_for
@@ -314,10 +330,11 @@ def _run(args: argparse.Namespace) -> int:
     )
     if control is not None:  # after the `running` line; the API is up already
         # one bus for every window onto the plant: the API's stream sees the traffic too
-        for line in control.lines:
-            print(line, flush=True)
+        # a moved port (8520 busy) is said before the URL lines it corrects
         for warning in control.warnings:
             print(warning, file=sys.stderr, flush=True)
+        for line in control.lines:
+            print(line, flush=True)
     # the plant lives as long as the process: the cyclic collector need not walk its
     # objects again and again (1000 TES: half the time of an edge; docs/decisions.md)
     gc.collect()
@@ -325,6 +342,7 @@ def _run(args: argparse.Namespace) -> int:
     live = sys.stdout.isatty() and not args.no_live
     end = None if args.duration is None else clock.now + round(args.duration * S)
     next_status = [clock.now]
+    urls = [] if control is None else footer_urls(control.lines)  # the live view's footer
 
     def tick(now: int) -> None:
         if control is not None:
@@ -332,7 +350,7 @@ def _run(args: argparse.Namespace) -> int:
         if end is not None and now >= end:
             runner.stop()
         if live_view is not None:
-            live_view.update(render(plant, endpoints, runner))
+            live_view.update(render(plant, endpoints, runner, urls))
         elif args.status_every > 0 and now >= next_status[0]:
             next_status[0] = now + round(args.status_every * S)
             print("\n".join(plain_status(plant)), flush=True)
@@ -342,12 +360,14 @@ def _run(args: argparse.Namespace) -> int:
         if live:
             from rich.live import Live
 
-            with Live(render(plant, endpoints, runner), refresh_per_second=5) as live_view:
+            view = render(plant, endpoints, runner, urls)
+            with Live(view, refresh_per_second=5) as live_view:
                 runner.run_forever(tick, tick_us=_tick(speed))
         else:
             runner.run_forever(tick, tick_us=_tick(speed))
     finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)  # the run ended: no forced stop
+        if _HAS_TIMER:
+            signal.setitimer(signal.ITIMER_REAL, 0)  # the run ended: no forced stop
         for number in (signal.SIGTERM, signal.SIGINT):  # closing: a signal cuts it short
             signal.signal(number, _interrupt)
         final = [] if live else plain_status(plant)  # the plant as it stopped (issue 10 item 21)
@@ -361,6 +381,9 @@ def _run(args: argparse.Namespace) -> int:
 
 
 STOP_GRACE_S = 1.5  # after SIGTERM/SIGINT, the most wall time the run has to end by itself
+
+
+_HAS_TIMER = hasattr(signal, "setitimer") and hasattr(signal, "SIGALRM")  # not on Windows
 
 
 def _interrupt(*_: object) -> None:
@@ -378,9 +401,11 @@ def stop_on_signals(runner: Runner) -> None:
         if runner.stopping:
             _interrupt()
         runner.stop()
-        signal.setitimer(signal.ITIMER_REAL, STOP_GRACE_S)
+        if _HAS_TIMER:  # POSIX; elsewhere a second Ctrl-C cuts the run short
+            signal.setitimer(signal.ITIMER_REAL, STOP_GRACE_S)
 
-    signal.signal(signal.SIGALRM, _interrupt)
+    if _HAS_TIMER:
+        signal.signal(signal.SIGALRM, _interrupt)
     signal.signal(signal.SIGTERM, stop)
     signal.signal(signal.SIGINT, stop)
 
@@ -492,8 +517,8 @@ def _script_lines(path: str) -> list[str] | None:
 
 def _attached(args: argparse.Namespace) -> int:
     """``console --attach URL``: the same commands, run on a running plant."""
-    from fieldtwin.control.attach import interactive, run_remote
-    from fieldtwin.control.client import Client
+    from fieldtwin.control.attach import explain, interactive, run_remote
+    from fieldtwin.control.client import Client, ControlError
 
     if args.plant is not None:
         print(
@@ -511,7 +536,11 @@ def _attached(args: argparse.Namespace) -> int:
             return run_remote(client, lines, sys.stdout, sys.stderr, args.script)
         if args.script == "-" or not sys.stdin.isatty():
             return run_remote(client, sys.stdin, sys.stdout, sys.stderr, "<stdin>")
-        client.plant()  # unreachable: a clear error, status 2
+        try:
+            client.plant()  # unreachable or refused: a clear error, status 2
+        except ControlError as exc:
+            print(f"fieldtwin: {explain(exc, client)}", file=sys.stderr)
+            return 2
         return interactive(client)
 
 

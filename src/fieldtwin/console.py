@@ -48,7 +48,8 @@ from fieldtwin.words import format_hex, parse_word
 HELP = {
     "read": "read OBJECT...            IW5,0  OW5,0,C  I5,3  I5,S  W100"
     " (a name alone reads it too)",
-    "write": "write OBJECT VALUE        OW5,0,C 1   OW5,1 H'00FF'   O5,2 1   W100 30",
+    "write": "write OBJECT VALUE        OW5,0,C 1   OW5,1 H'00FF'   O5,2 1   W100 30"
+    "   (outputs OW/O and internal W, B, CW, SY, SW; inputs are read-only)",
     "exchange": 'exchange M C [send W...] [text "..."] [length L] [recv N] [txt I] [timeout S]\n'
     "                           e.g. exchange H'0563' H'40' send H'00A0' 30 recv 0",
     "advance": "advance DURATION          advance 11   advance 250ms   advance 2min",

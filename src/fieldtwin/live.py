@@ -10,8 +10,12 @@ the O word sits under the I word (80 x 24 shows the default plant whole).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 from rich import box
 from rich.console import Console, ConsoleOptions, Group, RenderResult
+from rich.segment import Segment
+from rich.style import Style
 from rich.table import Table
 from rich.text import Text
 
@@ -29,21 +33,57 @@ _ALARM = {"ERR", "F"}  # LEDs that are red when lit
 
 
 class LiveView:
-    """A renderable that lays itself out for the width it is given."""
+    """A renderable that lays itself out for the width it is given; with ``urls`` (the
+    control and dashboard URLs) and ``height``, a footer naming them that stays on
+    screen at every size: the view above it is cut to make room."""
 
-    def __init__(self, plant: Plant, endpoints: list[str], runner: Runner | None = None) -> None:
+    def __init__(
+        self,
+        plant: Plant,
+        endpoints: list[str],
+        runner: Runner | None = None,
+        urls: Sequence[str] = (),
+        height: int | None = None,
+    ) -> None:
         self.plant = plant
         self.endpoints = endpoints
         self.runner = runner
+        self.urls = list(urls)
+        self.height = height
 
     def __rich_console__(self, console: Console, options: ConsoleOptions) -> RenderResult:
-        yield _render(self.plant, self.endpoints, options.max_width, self.runner)
+        view = _render(self.plant, self.endpoints, options.max_width, self.runner)
+        if not self.urls:
+            yield view
+            return
+        footer = Text("\n".join([*self.urls, "Ctrl-C to stop"]), "bold cyan", overflow="fold")
+        height = self.height if self.height is not None else options.size.height
+        lines = console.render_lines(view, options.update(height=None), pad=False)[:-1]
+        below = console.render_lines(footer, options.update(height=None), pad=False)
+        room = max(0, height - len(below) - 1)  # one line for the cursor rich keeps
+        if len(lines) > room:
+            lines = [*lines[: max(0, room - 1)], [Segment("…", Style(dim=True))]][:room]
+        for line in [*lines, *below]:
+            yield from line
+            yield Segment.line()
 
 
-def render(plant: Plant, endpoints: list[str], runner: Runner | None = None) -> LiveView:
+def footer_urls(lines: Sequence[str]) -> list[str]:
+    """The control and dashboard URLs among the control API's start lines."""
+    return [line for line in lines if line.startswith(("control: ", "dashboard: "))]
+
+
+def render(
+    plant: Plant,
+    endpoints: list[str],
+    runner: Runner | None = None,
+    urls: Sequence[str] = (),
+    height: int | None = None,
+) -> LiveView:
     """A rich renderable: the PLC rack and its modules, the TES, the endpoints; with the
-    ``runner``, the speed it reaches beside the speed asked."""
-    return LiveView(plant, endpoints, runner)
+    ``runner``, the speed it reaches beside the speed asked; with ``urls``, a footer
+    naming them that fits in ``height`` lines (default: the terminal's)."""
+    return LiveView(plant, endpoints, runner, urls, height)
 
 
 def _render(plant: Plant, endpoints: list[str], width: int, runner: Runner | None) -> Group:

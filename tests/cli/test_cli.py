@@ -88,9 +88,20 @@ def test_run_for_a_bounded_time_and_stop(tmp_path: Path) -> None:
     assert sum(line.startswith("t = ") for line in lines) >= 2
 
 
-def test_default_plant_runs_the_tank_application() -> None:
+def test_default_plant_runs_the_tank_application(tmp_path: Path) -> None:
+    # the embedded plant on free ports (a plant already running holds 5020 and 8520)
     done = fieldtwin(
-        "run", "--speed", "max", "--duration", "12", "--no-live", "--status-every", "11"
+        "run",
+        str(default_plant_copy(tmp_path)),
+        "--control-port",
+        "0",
+        "--speed",
+        "max",
+        "--duration",
+        "12",
+        "--no-live",
+        "--status-every",
+        "11",
     )
     assert done.returncode == 0, done.stderr
     assert "slot 5 TSX AEM 811: Run OK=on ERR=off F=off IW H'1008'" in done.stdout

@@ -291,3 +291,16 @@ def test_peek_has_no_side_effect_and_read_has_a_masters(tmp_path: Path) -> None:
     assert console.execute("tes 1 peek H'001'") == peeked  # nothing consumed
     assert console.execute("tes 1 read H'001'") == ["tes 1 H'001' = H'0008'"]  # memorized
     assert console.execute("tes 1 read H'001'") == ["tes 1 H'001' = H'0000'"]  # consumed
+
+
+def test_help_write_and_its_error_agree_on_what_is_writable(console: Console) -> None:
+    said = " ".join(console.execute("help write"))
+    with pytest.raises(ConfigError) as refused:
+        console.execute("write IW5,0 1")
+    error = str(refused.value)
+    for kind in ("W", "B", "CW", "SY", "SW"):
+        assert f" {kind}" in said, said
+        assert f"{kind}i" in error, error
+    assert "OW" in said and "OW" in error and "Oxy,i" in error
+    assert console.execute("write CW3 7") == ["CW3 = 7"]
+    assert console.execute("write B4 1") == ["B4 = 1"]

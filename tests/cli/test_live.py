@@ -96,3 +96,22 @@ def test_live_view_reads_well_at_80_100_and_200_columns(tmp_path: Path, width: i
     if width == 80:
         assert len(lines) <= 24  # the default plant fits an 80 x 24 terminal
     plant.close()
+
+
+@pytest.mark.parametrize(("width", "height"), [(80, 24), (100, 30), (200, 50), (60, 12)])
+def test_the_footer_names_the_control_and_dashboard_urls_at_every_size(
+    tmp_path: Path, width: int, height: int
+) -> None:
+    plant = load_plant(default_plant_copy(tmp_path), speed=None)
+    urls = ["control: http://127.0.0.1:8521", "dashboard: http://127.0.0.1:8521/"]
+    screen = RichConsole(record=True, width=width, height=height, file=io.StringIO())
+    screen.print(
+        render(plant, ["listening: modbus-tcp tcp://127.0.0.1:5020 slaves 1,2"], urls=urls)
+    )
+    text = screen.export_text()
+    lines = text.splitlines()
+    assert len(lines) <= height - 1, len(lines)  # fits: nothing of it scrolls away
+    tail = " ".join(lines[-3:])
+    for url in ("http://127.0.0.1:8521", "http://127.0.0.1:8521/"):
+        assert url in tail.replace(" ", "") or url in tail, (width, tail)
+    assert "Ctrl-C to stop" in text

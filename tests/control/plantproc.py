@@ -48,22 +48,23 @@ def _read(stream: IO[str], lines: queue.Queue[str]) -> None:
 
 @contextmanager
 def fieldtwin_run(plant: Path, *extra: str) -> Iterator[Running]:
+    with fieldtwin_run_with([sys.executable, "-m", "fieldtwin"], plant, ROOT, None, *extra) as r:
+        yield r
+
+
+@contextmanager
+def fieldtwin_run_with(
+    command: list[str], plant: Path, cwd: Path, env: dict[str, str] | None, *extra: str
+) -> Iterator[Running]:
+    """``COMMAND run PLANT --no-live --control-port 0 EXTRA...`` (an installed
+    `fieldtwin` too), up to its `attach:` line."""
     proc = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "fieldtwin",
-            "run",
-            str(plant),
-            "--no-live",
-            "--control-port",
-            "0",
-            *extra,
-        ],
+        [*command, "run", str(plant), "--no-live", "--control-port", "0", *extra],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
-        cwd=ROOT,
+        cwd=cwd,
+        env=env,
     )
     running = Running(proc)
     try:

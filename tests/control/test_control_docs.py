@@ -6,8 +6,8 @@ from __future__ import annotations
 import json
 import os
 import re
+import select
 import shlex
-import shutil
 import subprocess
 import sys
 from collections.abc import Iterator
@@ -16,6 +16,7 @@ from pathlib import Path
 import pytest
 
 from tests.control.plantproc import ROOT, Running, default_plant_copy, fieldtwin_run
+from tests.systools import require
 
 PAGES = (ROOT / "docs" / "control.md", ROOT / "README.md")
 README_URL = "http://127.0.0.1:8520"  # what README.md shows; replaced by the run's URL
@@ -43,16 +44,15 @@ def test_the_pages_show_curl_examples() -> None:
 
 @pytest.fixture(scope="module")
 def plant(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Running]:
-    if shutil.which("curl") is None:
-        pytest.fail("curl is not installed: apt-get install curl (the doc examples use it)")
+    require("curl")
     with fieldtwin_run(default_plant_copy(tmp_path_factory.mktemp("docs"))) as running:
         yield running
 
 
 def run_line(line: str, url: str, background: list[subprocess.Popen[str]]) -> None:
-    env = dict(os.environ, URL=url)
+    env = dict(os.environ, URL=url, FIELDTWIN_URL=url)
     command, _, comment = line.partition("  # ")
-    command = command.replace(README_URL, url).strip()
+    command = command.replace(README_URL, url).replace("$FIELDTWIN_URL", url).strip()
     if command == "wait":
         for proc in background:
             out, err = proc.communicate(timeout=STEP_S)
@@ -63,18 +63,19 @@ def run_line(line: str, url: str, background: list[subprocess.Popen[str]]) -> No
         return
     if command.startswith("python -m fieldtwin.control.watch"):
         words = shlex.split(command.rstrip("&").replace("$URL", url))
-        background.append(
-            subprocess.Popen(
-                [sys.executable, *words[1:]],
-                stdout=subprocess.PIPE,
-                stderr=subprocess.PIPE,
-                text=True,
-                cwd=ROOT,
-            )
+        watcher = subprocess.Popen(
+            [sys.executable, *words[1:]],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            cwd=ROOT,
         )
-        import time
-
-        time.sleep(1.0)  # the watcher subscribes before the next lines publish
+        background.append(watcher)
+        assert watcher.stderr is not None
+        # the watcher says when it is subscribed: the next lines publish after that
+        ready, _, _ = select.select([watcher.stderr], [], [], STEP_S)
+        said = watcher.stderr.readline() if ready else ""
+        assert said.startswith("subscribed: "), (line, said)
         return
     if command.startswith("fieldtwin "):
         words = shlex.split(command)

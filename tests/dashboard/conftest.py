@@ -9,7 +9,7 @@ from typing import Any
 import pytest
 
 from tests.control.plantproc import Running, default_plant_copy, fieldtwin_run
-from tests.dashboard.browser import INSTALL, chromium_path
+from tests.systools import require
 
 SPEED = "4"  # the AEM's 10 s self-test in 2.5 s of wall time; the page polls as at x1
 
@@ -25,9 +25,7 @@ def plant(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Running]:
 
 @pytest.fixture(scope="module")
 def browser() -> Iterator[Any]:
-    path = chromium_path()
-    if path is None:
-        pytest.fail(INSTALL, pytrace=False)
+    path = require("chromium")  # skipped with one summary line when missing (not in CI)
     try:
         from playwright.sync_api import sync_playwright
     except ImportError:

@@ -5,13 +5,14 @@ from __future__ import annotations
 import json
 import re
 import select
-import shutil
 import subprocess
 import sys
 import time
 from pathlib import Path
 
 import pytest
+
+from tests.systools import require
 
 ROOT = Path(__file__).resolve().parents[2]
 PLANT = """
@@ -34,7 +35,6 @@ model = "TES 32EST"
 slave = 3
 endpoint = "rtu+tcp://127.0.0.1:0"
 """
-TSHARK_HINT = "tshark is missing: install it with `apt-get install -y tshark` (.ci/run does)"
 
 
 def _ports(proc: subprocess.Popen[str]) -> tuple[int, int]:
@@ -139,8 +139,7 @@ def test_the_trace_says_who_answered_and_who_did_not(traced: tuple[Path, Path, i
 
 def test_tshark_decodes_the_pcap_as_modbus(traced: tuple[Path, Path, int, int]) -> None:
     _, pcap, tcp, rtu = traced
-    tshark = shutil.which("tshark")
-    assert tshark is not None, TSHARK_HINT
+    tshark = require("tshark")  # skipped with one summary line when missing (not in CI)
     argv = [tshark, "-r", str(pcap), "-d", f"tcp.port=={tcp},mbtcp", "-d", f"tcp.port=={rtu},mbrtu"]
     fields = [
         "-T",

@@ -54,6 +54,18 @@ def send(client: Client, line: str) -> ConsoleResult:
     return ConsoleResult(lines, error)
 
 
+def explain(exc: ControlError, client: Client) -> str:
+    """The refusal as a console user acts on it: a 401 says to use ``--token``."""
+    if exc.status == 401:
+        if client.token is None:
+            return (
+                "this plant needs its control token: use --token TOKEN (the `control token:`"
+                " line `fieldtwin run` printed)"
+            )
+        return "the token given with --token is not this plant's (see its `control token:` line)"
+    return str(exc)
+
+
 def run_remote(client: Client, lines: Iterable[str], out: TextIO, err: TextIO, source: str) -> int:
     """As fieldtwin.console.run_script, on the plant behind ``client``."""
     for number, line in enumerate(lines, start=1):
@@ -63,7 +75,8 @@ def run_remote(client: Client, lines: Iterable[str], out: TextIO, err: TextIO, s
             result = send(client, line)
         except (ControlError, ConfigError) as exc:
             out.flush()
-            print(f"{source}:{number}: {line.strip()}: {exc}", file=err)
+            said = explain(exc, client) if isinstance(exc, ControlError) else str(exc)
+            print(f"{source}:{number}: {line.strip()}: {said}", file=err)
             return 2
         for text in result.lines:
             print(text, file=out)
@@ -95,8 +108,8 @@ def interactive(client: Client) -> int:
             print(f"error: {exc}", file=sys.stderr)
             continue
         except ControlError as exc:
-            print(f"error: {exc}", file=sys.stderr)
-            if exc.status == 0:
+            print(f"error: {explain(exc, client)}", file=sys.stderr)
+            if exc.status in (0, 401):
                 return 2
             continue
         for text in result.lines:
@@ -105,4 +118,4 @@ def interactive(client: Client) -> int:
             print(f"error: {result.error}", file=sys.stderr)
 
 
-__all__ = ["interactive", "run_remote", "send"]
+__all__ = ["explain", "interactive", "run_remote", "send"]

@@ -2,7 +2,8 @@
 
 Prints the event stream of a running plant, one JSON object a line (what
 ``websocat ws://HOST:PORT/events`` would show), until ``--count`` events or
-``--idle`` seconds without one.
+``--idle`` seconds without one.  Once subscribed it says so on standard error
+(``subscribed: URL``): what is published after that line reaches it.
 """
 
 from __future__ import annotations
@@ -27,7 +28,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     seen = 0
     try:
         with Client(args.url, token=args.token) as client:
-            for event in client.events(args.kind, args.device, timeout_s=args.idle):
+            stream = client.events(args.kind, args.device, timeout_s=args.idle)
+            print(f"subscribed: {args.url}", file=sys.stderr, flush=True)
+            for event in stream:
                 print(json.dumps(event), flush=True)
                 seen += 1
                 if args.count and seen >= args.count:

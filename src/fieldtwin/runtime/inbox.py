@@ -12,8 +12,8 @@ is skipped.  The inbox is bounded (``max_pending``): past it, ``submit`` raises
 from __future__ import annotations
 
 import contextlib
-import os
 import select
+import socket
 import threading
 from collections import deque
 from collections.abc import Callable
@@ -42,15 +42,16 @@ class _Command:
 
 
 class Inbox:
-    """A bounded, thread-safe queue of commands with a wakeup descriptor (a pipe)."""
+    """A bounded, thread-safe queue of commands with a wakeup descriptor: a socket pair,
+    not a pipe, so that select() takes it everywhere (on Windows it takes sockets only)."""
 
     def __init__(self, max_pending: int = MAX_PENDING) -> None:
         if max_pending < 1:
             raise ValueError("an inbox holds at least one command")
         self.max_pending = max_pending
-        self._read_fd, self._write_fd = os.pipe()
-        os.set_blocking(self._read_fd, False)
-        os.set_blocking(self._write_fd, False)
+        self._reader, self._writer = socket.socketpair()
+        self._reader.setblocking(False)
+        self._writer.setblocking(False)
         self._queue: deque[_Command] = deque()
         self._lock = threading.Lock()
         self.closed = False
@@ -58,7 +59,7 @@ class Inbox:
 
     def fileno(self) -> int:
         """Readable while commands are pending (the runner watches it)."""
-        return self._read_fd
+        return self._reader.fileno()
 
     def submit(self, run: Callable[[], T]) -> Future[T]:
         """From any thread: run ``run()`` on the simulation's thread; its future."""
@@ -70,7 +71,7 @@ class Inbox:
                 raise InboxFull(f"{self.max_pending} commands already wait for the simulation")
             self._queue.append(_Command(run, future))
         with contextlib.suppress(BlockingIOError):  # full of wakeups already: it will look
-            os.write(self._write_fd, b"\0")
+            self._writer.send(b"\0")
         return future
 
     def __len__(self) -> int:
@@ -101,12 +102,12 @@ class Inbox:
         """Block up to ``timeout`` seconds for a command; True if one is pending."""
         if self._queue:
             return True
-        ready, _, _ = select.select([self._read_fd], [], [], timeout)
+        ready, _, _ = select.select([self._reader], [], [], timeout)
         return bool(ready) or bool(self._queue)
 
     def _drain_wakeups(self) -> None:
         try:
-            while os.read(self._read_fd, 4096):
+            while self._reader.recv(4096):
                 pass
         except (BlockingIOError, OSError):
             pass
@@ -122,8 +123,8 @@ class Inbox:
         for command in left:
             if command.future.set_running_or_notify_cancel():
                 command.future.set_exception(InboxClosed("the simulation has stopped"))
-        for fd in (self._read_fd, self._write_fd):
-            os.close(fd)
+        self._reader.close()
+        self._writer.close()
 
 
 __all__ = ["MAX_PENDING", "Inbox", "InboxClosed", "InboxFull"]

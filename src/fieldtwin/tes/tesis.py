@@ -33,7 +33,16 @@ from fieldtwin.tes.tesis_io import apply_forces, io_tables
 
 
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="fieldtwin tesis", description="TESIS32 workbench for TES")
+    p = argparse.ArgumentParser(
+        prog="fieldtwin tesis",
+        description="TESIS32 workbench for TES",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog="examples:\n"
+        "  fieldtwin tesis models\n"
+        '  fieldtwin tesis --store eeprom.db --model "TES 8EA" factory\n'
+        "  fieldtwin tesis --store eeprom.db set ai0.filter 16 && fieldtwin tesis --store"
+        " eeprom.db show",
+    )
     p.add_argument("--store", help="SQLite parameter store (default: in memory)")
     p.add_argument("--device", help="TES name in the store (default: the only one)")
     p.add_argument("--model", help=f"TES model ({', '.join(MODELS)})")

@@ -8,13 +8,15 @@ it were a serial port: ``serial.Serial(transport.peer_path, timeout=1)``.
 * We keep our own descriptor on the slave open, so the pty never hangs up when
   a peer closes and reopens it (the master would otherwise read EIO).  We
   never read from that descriptor, so nothing meant for the peer is consumed.
+
+termios and tty are imported when a pty is opened, not with this module: the rest of
+the package (a TCP-only plant, the console) runs where they do not exist (README,
+"POSIX").
 """
 
 from __future__ import annotations
 
 import os
-import termios
-import tty
 
 from fieldtwin.transports.base import READ_CHUNK, FdTransport, LineSettings, line_settings
 from fieldtwin.transports.virtualized import current
@@ -22,6 +24,8 @@ from fieldtwin.transports.virtualized import current
 
 def _apply_speed(fd: int, baud: int) -> None:
     """Record the baud rate in the termios of ``fd`` (cosmetic on a pty; peers may read it)."""
+    import termios
+
     speed = getattr(termios, f"B{baud}", None)
     if speed is None:
         return  # a non-standard rate: a pty does not care; char_time_us still uses it
@@ -34,6 +38,8 @@ class PtyTransport(FdTransport):
     """The master side of a pty pair."""
 
     def __init__(self, settings: LineSettings | None = None) -> None:
+        import tty  # here: see the module's docstring
+
         master, slave = os.openpty()
         try:
             tty.setraw(master)

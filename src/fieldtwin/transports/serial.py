@@ -5,26 +5,28 @@ with ``timeout=0``, so reads never block.  Writes go through ``os.write`` on
 the port's descriptor where it has one: pyserial 3.5's ``write`` with
 ``write_timeout=0`` spins forever when the kernel buffer is full (it retries
 EAGAIN in a loop), which would freeze the simulation.
+
+pyserial is imported when a port is opened, not with this module: on POSIX it loads
+termios and fcntl, which a TCP-only plant never needs (README, "POSIX").
 """
 
 from __future__ import annotations
 
 import os
-
-import serial as pyserial
+from typing import TYPE_CHECKING
 
 from fieldtwin.charformat import Parity
 from fieldtwin.errors import TransportError
 from fieldtwin.transports.base import READ_CHUNK, FdTransport, LineSettings, line_settings
 from fieldtwin.transports.virtualized import current
 
-_PARITY = {
-    Parity.NONE: pyserial.PARITY_NONE,
-    Parity.EVEN: pyserial.PARITY_EVEN,
-    Parity.ODD: pyserial.PARITY_ODD,
-}
-_BYTESIZE = {7: pyserial.SEVENBITS, 8: pyserial.EIGHTBITS}
-_STOPBITS = {1: pyserial.STOPBITS_ONE, 2: pyserial.STOPBITS_TWO}
+if TYPE_CHECKING:
+    import serial as pyserial
+
+# pyserial's PARITY_*, SEVENBITS/EIGHTBITS and STOPBITS_* values
+_PARITY = {Parity.NONE: "N", Parity.EVEN: "E", Parity.ODD: "O"}
+_BYTESIZE = {7: 7, 8: 8}
+_STOPBITS = {1: 1, 2: 2}
 
 
 class SerialTransport(FdTransport):
@@ -34,6 +36,8 @@ class SerialTransport(FdTransport):
         super().__init__(f"serial://{device}")
         self.device = device
         self.settings = settings
+        import serial as pyserial  # here: see the module's docstring
+
         try:
             self._port = pyserial.Serial(
                 device,
@@ -56,6 +60,8 @@ class SerialTransport(FdTransport):
         return self._port
 
     def _port_fd(self) -> int | None:
+        import serial as pyserial
+
         try:
             return int(self._port.fileno())
         except (AttributeError, OSError, pyserial.SerialException):
@@ -64,6 +70,8 @@ class SerialTransport(FdTransport):
     def _write(self, data: bytes) -> int:
         if self._fd is not None:
             return os.write(self._fd, data)
+        import serial as pyserial
+
         try:
             return int(self._port.write(data) or 0)
         except pyserial.SerialTimeoutException:
@@ -73,6 +81,8 @@ class SerialTransport(FdTransport):
         """What has arrived on the line; b"" if nothing; TransportError if the device went away."""
         self._check_open("receive")
         self.flush()
+        import serial as pyserial
+
         try:
             return bytes(self._port.read(READ_CHUNK))
         except (pyserial.SerialException, OSError) as exc:

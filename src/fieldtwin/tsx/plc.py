@@ -564,7 +564,10 @@ class Plc:
                 )
             entry.o_bits = set_bit(entry.o_bits, _index(ref), _bit_value(name, value))
             return
-        raise ConfigError(f"{name!r} is an input: only OWxy,i, OWxy,i,j and Oxy,i can be written")
+        raise ConfigError(
+            f"{name!r} is an input: only outputs (OWxy,i, OWxy,i,j, Oxy,i) and the PLC's"
+            " internal objects (Wi, Wi,j, Bi, CWi, SYi, SWi) can be written"
+        )
 
     # --- the program (fieldtwin.pl7) ------------------------------------------------
 
