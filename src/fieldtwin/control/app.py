@@ -18,10 +18,12 @@ from fastapi import FastAPI, Query, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.middleware.cors import CORSMiddleware
 
 from fieldtwin import __version__
-from fieldtwin.control.dashboard import add_dashboard
-from fieldtwin.control.guards import BodyLimit, TokenGate
+from fieldtwin.control.dashboard import add_dashboard, add_docs
+from fieldtwin.control.document import allowed_methods, bodyless, declare, routed
+from fieldtwin.control.guards import BodyLimit, BrowserGate, TokenGate, origin_of
 from fieldtwin.control.resources import Control, NotFound
 from fieldtwin.control.schemas import (
     ConsoleBody,
@@ -81,7 +83,12 @@ def _http_error(request: Request, exc: Exception) -> JSONResponse:
     body = {"error": str(exc.detail)}
     if "body" in str(exc.detail):
         body["field"] = "body"
-    return JSONResponse(status_code=exc.status_code, content=body, headers=exc.headers)
+    headers = exc.headers
+    if exc.status_code == 405:  # every method of the path, not only the first route's
+        allow = ", ".join(allowed_methods(request.app, request.scope))
+        body["allowed"] = allow
+        headers = {**(headers or {}), "Allow": allow}
+    return JSONResponse(status_code=exc.status_code, content=body, headers=headers)
 
 
 def _plant_error(request: Request, exc: Exception) -> JSONResponse:
@@ -97,9 +104,20 @@ def _late(request: Request, exc: Exception) -> JSONResponse:
     return JSONResponse(status_code=504, content={"error": str(exc)})
 
 
-def create_app(control: Control, sim: Sim, *, token: str | None = None) -> Any:
-    """The ASGI application: the routes inside the token gate and the body limit."""
+def create_app(
+    control: Control,
+    sim: Sim,
+    *,
+    token: str | None = None,
+    host: str | None = None,
+    allow_origins: Sequence[str] = (),
+) -> Any:
+    """The ASGI application: the routes inside the token gate, the browser's doors
+    (Host, Origin, JSON bodies: ``host`` is the configured listening host) and the
+    body limit (fieldtwin.control.guards)."""
     app = FastAPI(
+        docs_url=None,
+        redoc_url=None,
         title="fieldtwin control API",
         version=__version__,
         description="A running fieldtwin plant: devices, inputs, faults, objects, Text Blocks,"
@@ -121,7 +139,21 @@ def create_app(control: Control, sim: Sim, *, token: str | None = None) -> Any:
     _clock_routes(app, control, run)
     add_stream(app, control, sim)
     add_dashboard(app, control, run)
-    return BodyLimit(TokenGate(app, token))
+    add_docs(app)
+    declare(app, token=token is not None)
+    inner: Any = TokenGate(app, token)
+    origins = [o for o in map(origin_of, allow_origins) if o]
+    if origins:  # a page of an allowed origin may call the API (its preflights answered)
+        inner = CORSMiddleware(
+            inner,
+            allow_origins=origins,
+            allow_methods=["GET", "POST", "PUT", "DELETE"],
+            allow_headers=["authorization", "content-type"],
+        )
+    doors = BrowserGate(
+        inner, host=host, allow_origins=origins, bodyless=bodyless(app), routed=routed(app)
+    )
+    return BodyLimit(doors)
 
 
 Run = Callable[..., Any]

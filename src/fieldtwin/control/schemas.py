@@ -23,16 +23,20 @@ MAX_PROGRAM_TEXT = 48 * 1024  # characters of a program's text sent with `prog l
 
 
 class Closed(BaseModel):
-    model_config = ConfigDict(extra="forbid", strict=False)
+    """Strict: a JSON value is taken as its own type only (``false`` is no number,
+    ``"1"`` no integer); an integer is a number where a number is asked."""
+
+    model_config = ConfigDict(extra="forbid", strict=True)
 
 
 class InputBody(Closed):
     """Either ``value`` (in the input's unit, as the console takes it) or ``signal``
-    (a signal table exactly as the plant file writes it: ``{"kind": "sine", ...}``)."""
+    (a signal table exactly as the plant file writes it: ``{"kind": "sine", ...}``;
+    an integer stays one, as a ``seed`` must be)."""
 
-    value: bool | float | Annotated[str, Field(max_length=64)] | None = None
+    value: bool | int | float | Annotated[str, Field(max_length=64)] | None = None
     signal: (
-        dict[Name, bool | float | Annotated[str, Field(max_length=256)] | list[object]] | None
+        dict[Name, bool | int | float | Annotated[str, Field(max_length=256)] | list[object]] | None
     ) = Field(default=None, max_length=MAX_SIGNAL_KEYS)
 
 
