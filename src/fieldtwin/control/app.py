@@ -253,10 +253,11 @@ async def _mode(run: Run, c: Control, start: Callable[[], Any], body: ModeBody) 
     try:
         while not done.done() and c.runner.running and loop.time() < deadline:
             await asyncio.wait({done}, timeout=min(MODE_POLL_S, deadline - loop.time()))
+        ended_now = done.done() and not done.cancelled()
     finally:
         if not done.done():
             done.cancel()  # the mode's own future runs on (it cannot be cancelled)
-    if done.done():
+    if ended_now:
         return done.result()
     return await run(c.clock_state)  # still running: the mode as it stands
 

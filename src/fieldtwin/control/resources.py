@@ -266,13 +266,22 @@ class Control:
         until = self.plant.clock.now + to_us(seconds)
         return self._start("power-break", until, "power back", power_back)
 
-    def remove(self, module: str) -> Json:
+    def _slot(self, module: str) -> tuple[int, int]:
+        """A module's rack and slot; NotFound (404) for a slot without a module."""
         rack, slot = module_address(module)
+        there = [m for m in self.plc.modules if (m.rack, m.slot) == (rack, slot)]
+        if not there:
+            allowed = ", ".join(str(m.rack * 10 + m.slot) for m in self.plc.modules)
+            raise NotFound(f"no module in rack {rack} slot {slot} (allowed: {allowed})")
+        return rack, slot
+
+    def remove(self, module: str) -> Json:
+        rack, slot = self._slot(module)
         self.plc.remove(rack, slot)
         return {"module": module, "present": False}
 
     def insert(self, module: str) -> Json:
-        rack, slot = module_address(module)
+        rack, slot = self._slot(module)
         self.plc.reinsert(rack, slot)
         return {"module": module, "present": True}
 
