@@ -4,7 +4,8 @@ Each handler validates its request (the schemas), hands one function to the
 simulation's thread (``Sim.call``) and answers with its result.  Errors are
 JSON: ``{"error": "...", "field": "...", "allowed": "..."}``; 400 for a user's
 mistake the plant names, 404 for an unknown device, input, fault or exchange,
-413 for a body over 64 KiB, 422 for a body that does not fit its schema,
+409 for a request the plant's state refuses (a time already past, a busy Text
+Block), 413 for a body over 64 KiB, 422 for a body that does not fit its schema,
 503 while the simulation cannot take a command, 504 when it did not answer in time.
 """
 
@@ -24,7 +25,7 @@ from fieldtwin import __version__
 from fieldtwin.control.dashboard import add_dashboard, add_docs
 from fieldtwin.control.document import allowed_methods, bodyless, declare, routed
 from fieldtwin.control.guards import BodyLimit, BrowserGate, TokenGate, origin_of
-from fieldtwin.control.resources import Control, NotFound
+from fieldtwin.control.resources import Conflict, Control, NotFound
 from fieldtwin.control.schemas import (
     ConsoleBody,
     ExchangeBody,
@@ -92,7 +93,7 @@ def _http_error(request: Request, exc: Exception) -> JSONResponse:
 
 
 def _plant_error(request: Request, exc: Exception) -> JSONResponse:
-    status = 404 if isinstance(exc, NotFound) else 400
+    status = 404 if isinstance(exc, NotFound) else 409 if isinstance(exc, Conflict) else 400
     return JSONResponse(status_code=status, content={"error": str(exc)})
 
 

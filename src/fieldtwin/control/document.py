@@ -43,12 +43,16 @@ EMPTY_BODY_SCHEMA: dict[str, Any] = {
     "additionalProperties": False,
     "description": "this route takes no value: send {} (a JSON body, which an HTML form cannot)",
 }
+NAMED_IN_BODY = frozenset({"/plc/remove", "/plc/insert"})  # a module slot: 404 if empty
+CONFLICTS = frozenset({"/clock/run-until", "/exchanges"})  # refused by the plant's state: 409
 WHY = {
     400: "the plant refuses (a value it does not take, a busy Text Block, a body not UTF-8)"
     ", or a Host header that is not this plant's",
     401: "a token is required and missing or wrong",
     403: "a request from another origin or site (Origin, Sec-Fetch-Site)",
-    404: "an unknown device, input, fault, object or exchange",
+    404: "an unknown device, input, fault, object, exchange or module slot",
+    409: "the plant's state refuses it: a time already past, a busy Text Block, a table"
+    " shorter than its length",
     413: "a body over 64 KiB",
     415: "a request that changes the plant without Content-Type: application/json",
     422: "the body or a parameter does not fit its schema",
@@ -90,8 +94,10 @@ def _codes(route: APIRoute, method: str, token: bool) -> list[int]:
     codes = [400, 403, 503, 504]
     if token:
         codes.append(401)
-    if route.dependant.path_params:
+    if route.dependant.path_params or route.path_format in NAMED_IN_BODY:
         codes.append(404)
+    if route.path_format in CONFLICTS:
+        codes.append(409)
     if route.dependant.path_params or route.dependant.query_params:
         codes.append(422)
     if method in STATE_CHANGING:
