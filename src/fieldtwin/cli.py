@@ -155,6 +155,14 @@ def _control_options(run: argparse.ArgumentParser) -> None:
     run.add_argument(
         "--control-token", help="the token every request must give (default: generated)"
     )
+    run.add_argument(
+        "--allow-origin",
+        action="append",
+        default=[],
+        metavar="ORIGIN",
+        help="a web origin (http://host:port) whose pages may call the control API besides"
+        " the plant's own; repeatable (default: none)",
+    )
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -464,6 +472,7 @@ def _start_control(
         host=args.control_host,
         port=args.control_port,
         token=args.control_token,
+        allow_origins=args.allow_origin,
     )
     return launched
 

@@ -9,6 +9,8 @@ import urllib.error
 import urllib.request
 from pathlib import Path
 
+import httpx
+
 from fieldtwin.control.dashboard import STATIC, TEMPLATES
 from tests.control.plantproc import Running, default_plant_copy, fieldtwin_run
 
@@ -73,7 +75,20 @@ def test_with_a_token_the_page_and_its_files_need_it(tmp_path: Path) -> None:
         assert f"dashboard: {running.url}/?token=s3cret" in running.lines
         assert get(f"{running.url}/")[0] == 401
         assert get(f"{running.url}/static/dashboard.js")[0] == 401
-        status, _, html = get(f"{running.url}/?token=s3cret")
-        assert status == 200
-        assert 'src="/static/dashboard.js?v=' in html and "token=s3cret" in html
+        first = httpx.get(f"{running.url}/?token=s3cret", timeout=10)
+        assert first.status_code == 200
+        html = first.text
+        # R13: the token is no longer written into the page's file URLs (it would land in
+        # logs and history); the first load keeps it in an HttpOnly SameSite=Strict cookie
+        assert 'src="/static/dashboard.js?v=' in html and "s3cret" not in html
+        cookie = first.headers["set-cookie"]
+        port = running.url.rsplit(":", 1)[1]
+        assert cookie.startswith(f"fieldtwin_token_{port}=s3cret;")
+        assert "HttpOnly" in cookie and "SameSite=Strict" in cookie
+        jar = {f"fieldtwin_token_{port}": "s3cret"}
+        for path in ("/static/dashboard.js", "/dashboard/state", "/"):
+            assert httpx.get(running.url + path, cookies=jar, timeout=10).status_code == 200
+        # ?token= is taken on the first page load and the WebSocket only, not on every route
+        assert get(f"{running.url}/static/dashboard.js?token=s3cret")[0] == 401
+        assert get(f"{running.url}/dashboard/state?token=s3cret")[0] == 401
         assert get(f"{running.url}/dashboard/state", token="s3cret")[0] == 200

@@ -145,18 +145,19 @@ def test_long_clock_commands_hold_nothing_and_pause_takes_effect_at_once(tmp_pat
             time.sleep(1.0)  # the mode runs; Modbus is served all along
             assert len(poller.answers) > 5 and poller.failures == 0
             assert poller.worst_gap <= WORST_GAP_S
-            paused = api.post("/clock/pause").json()  # (held time: Modbus waits, by design)
+            # (held time: Modbus waits, by design)
+            paused = api.post("/clock/pause", json={}).json()
             assert paused["paused"] is True and paused["mode"] is None
             time.sleep(0.3)
             assert api.get("/clock").json()["t_us"] == paused["t_us"]  # held at once
             step = api.post("/clock/step", json={"ms": 86_400_000}).json()
             assert step["mode"] == "step"
             assert api.put("/clock/speed", json={"speed": 2}).json()["mode"] == "step"
-            assert api.post("/clock/pause").json()["mode"] is None
+            assert api.post("/clock/pause", json={}).json()["mode"] is None
             broke = api.post("/plc/power-break", json={"seconds": 3600}).json()
             assert broke["mode"] == "power-break" and broke["power"] == "off"
             assert api.get("/plant").status_code == 200
-            held = api.post("/clock/pause").json()
+            held = api.post("/clock/pause", json={}).json()
             assert held["mode"] is None  # the break is over: the power is back
             short = api.post("/clock/step", json={"ms": 100, "wait": True, "wait_s": 5})
             assert short.json()["t_us"] == held["t_us"] + 100_000

@@ -4,7 +4,8 @@ Each handler validates its request (the schemas), hands one function to the
 simulation's thread (``Sim.call``) and answers with its result.  Errors are
 JSON: ``{"error": "...", "field": "...", "allowed": "..."}``; 400 for a user's
 mistake the plant names, 404 for an unknown device, input, fault or exchange,
-413 for a body over 64 KiB, 422 for a body that does not fit its schema,
+409 for a request the plant's state refuses (a time already past, a busy Text
+Block), 413 for a body over 64 KiB, 422 for a body that does not fit its schema,
 503 while the simulation cannot take a command, 504 when it did not answer in time.
 """
 
@@ -19,11 +20,13 @@ from fastapi import FastAPI, Query, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.middleware.cors import CORSMiddleware
 
 from fieldtwin import __version__
-from fieldtwin.control.dashboard import add_dashboard
-from fieldtwin.control.guards import BodyLimit, TokenGate
-from fieldtwin.control.resources import Control, NotFound
+from fieldtwin.control.dashboard import add_dashboard, add_docs
+from fieldtwin.control.document import allowed_methods, bodyless, declare, routed
+from fieldtwin.control.guards import BodyLimit, BrowserGate, TokenGate, origin_of
+from fieldtwin.control.resources import Conflict, Control, NotFound
 from fieldtwin.control.schemas import (
     ConsoleBody,
     ExchangeBody,
@@ -82,11 +85,16 @@ def _http_error(request: Request, exc: Exception) -> JSONResponse:
     body = {"error": str(exc.detail)}
     if "body" in str(exc.detail):
         body["field"] = "body"
-    return JSONResponse(status_code=exc.status_code, content=body, headers=exc.headers)
+    headers = exc.headers
+    if exc.status_code == 405:  # every method of the path, not only the first route's
+        allow = ", ".join(allowed_methods(request.app, request.scope))
+        body["allowed"] = allow
+        headers = {**(headers or {}), "Allow": allow}
+    return JSONResponse(status_code=exc.status_code, content=body, headers=headers)
 
 
 def _plant_error(request: Request, exc: Exception) -> JSONResponse:
-    status = 404 if isinstance(exc, NotFound) else 400
+    status = 404 if isinstance(exc, NotFound) else 409 if isinstance(exc, Conflict) else 400
     return JSONResponse(status_code=status, content={"error": str(exc)})
 
 
@@ -98,9 +106,20 @@ def _late(request: Request, exc: Exception) -> JSONResponse:
     return JSONResponse(status_code=504, content={"error": str(exc)})
 
 
-def create_app(control: Control, sim: Sim, *, token: str | None = None) -> Any:
-    """The ASGI application: the routes inside the token gate and the body limit."""
+def create_app(
+    control: Control,
+    sim: Sim,
+    *,
+    token: str | None = None,
+    host: str | None = None,
+    allow_origins: Sequence[str] = (),
+) -> Any:
+    """The ASGI application: the routes inside the token gate, the browser's doors
+    (Host, Origin, JSON bodies: ``host`` is the configured listening host) and the
+    body limit (fieldtwin.control.guards)."""
     app = FastAPI(
+        docs_url=None,
+        redoc_url=None,
         title="fieldtwin control API",
         version=__version__,
         description="A running fieldtwin plant: devices, inputs, faults, objects, Text Blocks,"
@@ -122,7 +141,21 @@ def create_app(control: Control, sim: Sim, *, token: str | None = None) -> Any:
     _clock_routes(app, control, run)
     add_stream(app, control, sim)
     add_dashboard(app, control, run)
-    return BodyLimit(TokenGate(app, token))
+    add_docs(app)
+    declare(app, token=token is not None)
+    inner: Any = TokenGate(app, token)
+    origins = [o for o in map(origin_of, allow_origins) if o]
+    if origins:  # a page of an allowed origin may call the API (its preflights answered)
+        inner = CORSMiddleware(
+            inner,
+            allow_origins=origins,
+            allow_methods=["GET", "POST", "PUT", "DELETE"],
+            allow_headers=["authorization", "content-type"],
+        )
+    doors = BrowserGate(
+        inner, host=host, allow_origins=origins, bodyless=bodyless(app), routed=routed(app)
+    )
+    return BodyLimit(doors)
 
 
 Run = Callable[..., Any]
@@ -254,10 +287,11 @@ async def _mode_end(c: Control, ended: Future[Any], wait_s: float) -> Any | None
     try:
         while not done.done() and c.runner.running and loop.time() < deadline:
             await asyncio.wait({done}, timeout=min(MODE_POLL_S, deadline - loop.time()))
+        ended_now = done.done() and not done.cancelled()
     finally:
         if not done.done():
             done.cancel()  # the mode's own future runs on (it cannot be cancelled)
-    return done.result() if done.done() and not done.cancelled() else None
+    return done.result() if ended_now else None
 
 
 def _clock_routes(app: FastAPI, c: Control, run: Run) -> None:

@@ -109,8 +109,12 @@ class Client:
         self._http.close()
 
     def request(self, method: str, path: str, body: object = None, **kw: Any) -> Any:
+        """One request; one that changes the plant always sends a JSON body (``{}`` when
+        there is no value: the API refuses a request without, as a web form sends it)."""
+        if body is None and method.upper() in ("POST", "PUT", "DELETE", "PATCH"):
+            body = {}
         try:
-            reply = self._http.request(method, path, json=body if body is not None else None, **kw)
+            reply = self._http.request(method, path, json=body, **kw)
         except httpx.HTTPError as exc:
             raise ControlError(0, f"{self.url}: cannot reach the control API ({exc})") from None
         try:

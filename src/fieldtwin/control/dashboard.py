@@ -2,7 +2,8 @@
 
 ``GET /`` is the page, rendered from the Jinja2 template ``templates/dashboard.html``;
 ``/static/...`` its scripts, styles and the vendored uPlot (every file ships in
-the package: no CDN).  ``GET /dashboard/state`` gives, in one answer, what the
+the package: no CDN); ``GET /docs`` the API's document in Swagger UI, vendored too.
+``GET /dashboard/state`` gives, in one answer, what the
 page draws (fieldtwin.control.panels), as one command through the inbox like
 every other request: the page never touches the simulation, and everything it
 changes goes through the control API's own resources.
@@ -50,14 +51,14 @@ def add_dashboard(app: FastAPI, control: Control, run: Callable[..., Any]) -> No
 
     @app.get("/", include_in_schema=False, response_class=HTMLResponse)
     async def page(request: Request) -> Any:
-        token = request.query_params.get("token", "")
+        # the token, if any, came in the URL once and is kept in a cookie (control.guards):
+        # the page and its files never carry it
         return template().TemplateResponse(
             request,
             "dashboard.html",
             {
                 "version": __version__,
-                "token": token,
-                "suffix": f"?v={__version__}" + (f"&token={token}" if token else ""),
+                "suffix": f"?v={__version__}",
                 "rate": _rate(request.query_params.get("rate")),
             },
         )
@@ -67,4 +68,23 @@ def add_dashboard(app: FastAPI, control: Control, run: Callable[..., Any]) -> No
         return await run(lambda: panels(control))
 
 
-__all__ = ["DEFAULT_RATE", "MAX_RATE", "add_dashboard"]
+def add_docs(app: FastAPI) -> None:
+    """``GET /docs``: Swagger UI over ``/openapi.json``, from the package's own files."""
+    from fastapi.openapi.docs import get_swagger_ui_html
+
+    vendor = "/static/vendor/swagger-ui"
+
+    @app.get("/docs", include_in_schema=False, response_class=HTMLResponse)
+    async def docs() -> Any:
+        return get_swagger_ui_html(
+            openapi_url="/openapi.json",
+            title=f"{app.title} {__version__}",
+            swagger_js_url=f"{vendor}/swagger-ui-bundle.js?v={__version__}",
+            swagger_css_url=f"{vendor}/swagger-ui.css?v={__version__}",
+            swagger_favicon_url=f"{vendor}/favicon-32x32.png",
+            # no badge fetched from the validator's site: nothing leaves the machine
+            swagger_ui_parameters={"validatorUrl": None},
+        )
+
+
+__all__ = ["DEFAULT_RATE", "MAX_RATE", "add_dashboard", "add_docs"]

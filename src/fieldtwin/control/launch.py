@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+from fieldtwin.control.guards import origin_of
 from fieldtwin.control.observer import Observer
 from fieldtwin.control.resources import Control
 from fieldtwin.control.server import (
@@ -50,6 +52,7 @@ def launch(
     host: str | None,
     port: int | None,
     token: str | None,
+    allow_origins: Sequence[str] = (),
 ) -> Launched:
     """Start the API on ``host``:``port`` (None: the default port, or any free one if busy).
 
@@ -64,7 +67,8 @@ def launch(
     sock = bind_control(host, DEFAULT_PORT if port is None else port, fallback=port is None)
     inbox = Inbox()
     control = Control(plant, runner, bus)
-    server = ControlServer(control, inbox, sock, token)
+    origins = check_origins(allow_origins)
+    server = ControlServer(control, inbox, sock, token, allow_origins=origins)
     runner.take_commands(inbox)
     launched = Launched(server, inbox, runner, Observer(plant.devices, bus))
     try:
@@ -88,6 +92,20 @@ def launch(
     return launched
 
 
+def check_origins(given: Sequence[str]) -> list[str]:
+    """``--allow-origin`` values: each a web origin (``http://host:port``), else ConfigError."""
+    origins = []
+    for text in given:
+        origin = origin_of(text)
+        if origin is None:
+            raise ConfigError(
+                f"--allow-origin {text!r}: not a web origin"
+                " (allowed: http://HOST[:PORT] or https://HOST[:PORT], no path)"
+            )
+        origins.append(origin)
+    return origins
+
+
 def exposure_warnings(host: str, url: str) -> list[str]:
     """The warning naming the control listener when other machines can reach it."""
     why = reachability(host)
@@ -99,4 +117,4 @@ def exposure_warnings(host: str, url: str) -> list[str]:
     ]
 
 
-__all__ = ["Launched", "exposure_warnings", "launch"]
+__all__ = ["Launched", "check_origins", "exposure_warnings", "launch"]

@@ -44,6 +44,11 @@ class NotFound(ConfigError):
     """An unknown device, input, fault or exchange: answered 404."""
 
 
+class Conflict(ConfigError):
+    """A request that fits its schema but not the plant's state: answered 409 (a time
+    already past, a Text Block busy or refusing its table)."""
+
+
 @dataclass(frozen=True, slots=True)
 class _Started:
     id: int
@@ -260,15 +265,19 @@ class Control:
                 data = text.encode("latin-1")
             except UnicodeEncodeError:
                 raise ConfigError("text: allowed ISO 8859-1 characters only") from None
-        block = self.plc.start_exchange(
-            m,
-            c,
-            None if data is not None else send,
-            send_bytes=data,
-            length=length,
-            recv_bytes=recv,
-            txt=txt,
-        )
+        plc = self.plc
+        try:
+            block = plc.start_exchange(
+                m,
+                c,
+                None if data is not None else send,
+                send_bytes=data,
+                length=length,
+                recv_bytes=recv,
+                txt=txt,
+            )
+        except ConfigError as exc:
+            raise Conflict(str(exc)) from None
         ident = self._next_exchange
         self._next_exchange += 1
         self._exchanges[ident] = _Started(ident, block, m, c)
@@ -310,13 +319,25 @@ class Control:
         until = self.plant.clock.now + to_us(seconds)
         return self._start("power-break", until, "power back", power_back)
 
+    def _slot(self, module: str) -> tuple[int, int]:
+        """A module's rack and slot; NotFound (404) for a slot without a module."""
+        modules = self.plc.modules
+        allowed = ", ".join(str(m.rack * 10 + m.slot) for m in modules)
+        try:
+            rack, slot = module_address(module)
+        except ConfigError as exc:
+            raise NotFound(f"{exc}; no such module (allowed: {allowed})") from None
+        if not any((m.rack, m.slot) == (rack, slot) for m in modules):
+            raise NotFound(f"no module in rack {rack} slot {slot} (allowed: {allowed})")
+        return rack, slot
+
     def remove(self, module: str) -> Json:
-        rack, slot = module_address(module)
+        rack, slot = self._slot(module)
         self.plc.remove(rack, slot)
         return {"module": module, "present": False}
 
     def insert(self, module: str) -> Json:
-        rack, slot = module_address(module)
+        rack, slot = self._slot(module)
         self.plc.reinsert(rack, slot)
         return {"module": module, "present": True}
 
@@ -381,7 +402,10 @@ class Control:
         return self._start("step", self.plant.clock.now + round(ms * MS), "stepped")
 
     def run_until(self, t_s: float) -> Json:
-        return self._start("run-until", round(t_s * S), "ran")
+        try:
+            return self._start("run-until", round(t_s * S), "ran")
+        except ConfigError as exc:  # a time already past
+            raise Conflict(str(exc)) from None
 
     def set_speed(self, speed: float | None) -> Json:
         self.runner.set_speed(speed)
@@ -432,4 +456,12 @@ class Control:
             return {"lines": [], "error": str(exc)}
 
 
-__all__ = ["MAX_EXCHANGES", "Control", "NotFound", "device_id", "refuse_files", "status_json"]
+__all__ = [
+    "MAX_EXCHANGES",
+    "Conflict",
+    "Control",
+    "NotFound",
+    "device_id",
+    "refuse_files",
+    "status_json",
+]

@@ -8,11 +8,22 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
 
 from fieldtwin.runtime.pace import MAX_SPEED, MIN_SPEED
 
-Word = Annotated[int, Field(ge=0, le=0xFFFF, description="a 16-bit word, 0..65535")]
+
+def _no_bool_no_text(value: object) -> object:
+    """A JSON integer (``7`` or ``7.0``, as JSON Schema's integer), never ``true`` nor ``"7"``."""
+    if isinstance(value, bool | str):
+        raise ValueError("Input should be a valid integer (not a boolean nor a string)")
+    return value
+
+
+NoBool = BeforeValidator(_no_bool_no_text)
+Word = Annotated[
+    int, Field(strict=False, ge=0, le=0xFFFF, description="a 16-bit word, 0..65535"), NoBool
+]
 Number = Annotated[float, Field(allow_inf_nan=False)]
 Name = Annotated[str, Field(min_length=1, max_length=64)]
 MAX_SIGNAL_KEYS = 32
@@ -23,16 +34,20 @@ MAX_PROGRAM_TEXT = 48 * 1024  # characters of a program's text sent with `prog l
 
 
 class Closed(BaseModel):
-    model_config = ConfigDict(extra="forbid", strict=False)
+    """Strict: a JSON value is taken as its own type only (``false`` is no number,
+    ``"1"`` no integer); an integer is a number where a number is asked."""
+
+    model_config = ConfigDict(extra="forbid", strict=True)
 
 
 class InputBody(Closed):
     """Either ``value`` (in the input's unit, as the console takes it) or ``signal``
-    (a signal table exactly as the plant file writes it: ``{"kind": "sine", ...}``)."""
+    (a signal table exactly as the plant file writes it: ``{"kind": "sine", ...}``;
+    an integer stays one, as a ``seed`` must be)."""
 
-    value: bool | float | Annotated[str, Field(max_length=64)] | None = None
+    value: bool | int | float | Annotated[str, Field(max_length=64)] | None = None
     signal: (
-        dict[Name, bool | float | Annotated[str, Field(max_length=256)] | list[object]] | None
+        dict[Name, bool | int | float | Annotated[str, Field(max_length=256)] | list[object]] | None
     ) = Field(default=None, max_length=MAX_SIGNAL_KEYS)
 
 
@@ -47,12 +62,16 @@ class ObjectBody(Closed):
 
 class ExchangeBody(Closed):
     m: Word = Field(description="TXTi,M: H'xyzz' rack x, slot y, channel zz (63: module system)")
-    c: Annotated[int, Field(ge=0, le=0xFF)] = Field(description="TXTi,C: the request code")
+    c: Annotated[int, Field(strict=False, ge=0, le=0xFF), NoBool] = Field(
+        description="TXTi,C: the request code"
+    )
     send: list[Word] = Field(default_factory=list, max_length=MAX_SEND_WORDS)
     text: Annotated[str, Field(max_length=MAX_TEXT)] | None = None
-    length: Annotated[int, Field(ge=0, le=MAX_TEXT)] | None = None
-    recv: Annotated[int, Field(ge=0, le=2 * MAX_SEND_WORDS)] = 0
-    txt: Annotated[int, Field(ge=0, le=63)] = 0  # TXT0..TXT63 (AEM 3.5-1: N/MAX 64)
+    length: Annotated[int, Field(strict=False, ge=0, le=MAX_TEXT), NoBool] | None = None
+    recv: Annotated[int, Field(strict=False, ge=0, le=2 * MAX_SEND_WORDS), NoBool] = 0
+    txt: Annotated[int, Field(strict=False, ge=0, le=63), NoBool] = (
+        0  # TXT0..TXT63 (AEM 3.5-1: N/MAX 64)
+    )
 
 
 MAX_MODE_WAIT_S = 3600.0  # the longest a request may wait for its mode's end

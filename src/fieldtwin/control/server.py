@@ -14,6 +14,7 @@ import secrets
 import socket
 import threading
 import time
+from collections.abc import Sequence
 
 import uvicorn
 
@@ -75,12 +76,21 @@ def bind_control(host: str, port: int, *, fallback: bool) -> socket.socket:
 class ControlServer:
     """The API of one running plant, served on one socket."""
 
-    def __init__(self, control: Control, inbox: Inbox, sock: socket.socket, token: str | None):
+    def __init__(
+        self,
+        control: Control,
+        inbox: Inbox,
+        sock: socket.socket,
+        token: str | None,
+        *,
+        allow_origins: Sequence[str] = (),
+    ) -> None:
         self.control = control
         self.inbox = inbox
         self.token = token
         self._socket = sock
-        app = create_app(control, Sim(inbox), token=token)
+        host = sock.getsockname()[0]
+        app = create_app(control, Sim(inbox), token=token, host=host, allow_origins=allow_origins)
         config = uvicorn.Config(
             app, log_level="warning", lifespan="off", access_log=False, ws_max_size=65536
         )

@@ -4,7 +4,14 @@
 
 const BODY = document.body;
 const PARAMS = new URLSearchParams(location.search);
-const TOKEN = PARAMS.get("token") || BODY.dataset.token || "";
+// a token comes in the first page's URL only (the plant keeps it in an HttpOnly cookie):
+// it is taken out of the address bar and history at once, and used from memory
+const TOKEN = PARAMS.get("token") || "";
+if (PARAMS.has("token")) {
+  const clean = new URL(location.href);
+  clean.searchParams.delete("token");
+  history.replaceState(null, "", clean);
+}
 const RATE = Math.max(1, Math.min(20, Number(PARAMS.get("rate") || BODY.dataset.rate) || 5));
 const TREND_POINTS = 3000; // points kept per series (a ring)
 const TRAFFIC_KEPT = 1000; // events kept for the traffic view (a ring)
@@ -17,10 +24,14 @@ window.__fieldtwin = stats;
 // --- the API -------------------------------------------------------------------------
 
 async function api(method, path, body) {
+  // every request that changes the plant carries a JSON body ({} when the route takes
+  // none): the plant refuses one without (415), as an HTML form would send it
   const headers = { "content-type": "application/json" };
   if (TOKEN) headers.authorization = `Bearer ${TOKEN}`;
+  const changes = method !== "GET" && method !== "HEAD";
   const answer = await fetch(path, {
-    method, headers, body: body === undefined ? undefined : JSON.stringify(body),
+    method, headers, credentials: "same-origin",
+    body: changes ? JSON.stringify(body === undefined ? {} : body) : undefined,
   });
   let data = null;
   try { data = await answer.json(); } catch (_) { data = null; }
