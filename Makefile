@@ -27,7 +27,7 @@ test: $(STAMP) test-tools
 
 # The inner loop: no test that starts a process, a browser or a socket server.
 test-fast: $(STAMP)
-	$(BIN)/python -m pytest -m "not integration" -n auto
+	FIELDTWIN_FAST_EXAMPLES=25 $(BIN)/python -m pytest -m "not integration" -n auto
 
 # tshark, curl, chromium for the tests that need them (installed as root on Debian).
 test-tools:
