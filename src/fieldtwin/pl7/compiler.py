@@ -24,11 +24,12 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol
 
+from fieldtwin.errors import ConfigError
 from fieldtwin.objects import ObjectRef
 from fieldtwin.pl7 import tree as t
-from fieldtwin.pl7.errors import ProgramFault, WatchdogOverrun
+from fieldtwin.pl7.errors import ObjectRefused, Pl7Error, ProgramFault, WatchdogOverrun
 from fieldtwin.pl7.memory import ProgramMemory, Reader
-from fieldtwin.pl7.printer import format_sentence
+from fieldtwin.pl7.printer import format_object, format_sentence
 from fieldtwin.pl7.types import BIT, WORD, Type, bits, words
 
 NEXT = -1
@@ -227,6 +228,7 @@ class _Generator:
         self.temps = 0
         self.ops = 0  # operations of the code generated so far (the watchdog's cost)
         self.line = 0  # the line of the sentence being compiled
+        self.object: t.Expr | None = None  # the object being bound (named if refused)
 
     def bind(self, value: object) -> str:
         name = self.names.get(id(value))
@@ -258,8 +260,14 @@ class _Generator:
                 lines += [f"if {watch} and {sentence.label} in {watch}:"]
                 lines += [f"    {hit}({sentence.label})"]
             body: list[str] = []
-            for statement in sentence.body:
-                body.extend(self.statement(statement))
+            try:
+                for statement in sentence.body:
+                    body.extend(self.statement(statement))
+            except (Pl7Error, ObjectRefused):
+                raise
+            except ConfigError as exc:  # the PLC refused an object: name it, with its line
+                token = format_object(self.object) if self.object is not None else ""
+                raise ObjectRefused(sentence.pos.line, token, str(exc)) from None
             lines += ["try:", *_indent(body), "except _PF as _e:"]
             lines += [f"    {fault}({sentence.pos.line}, _e)"]
         lines.append(f"return {NEXT}")
@@ -322,6 +330,7 @@ class _Generator:
     def store(self, target: t.Expr, value: str, source: Type) -> list[str]:
         """Lines that store ``value`` (of type ``source``) into ``target``."""
         self.ops += 1
+        self.object = target
         if isinstance(target, t.Table):
             return self.store_table(target, value, source)
         if isinstance(target, t.Indexed):
@@ -394,6 +403,7 @@ class _Generator:
         # a memory may lend more cells for reading than for writing (the PLC's input
         # images: tsx/plcmemory.py read_cell), read in place, never through a call
         read_cell = getattr(self.m, "read_cell", self.m.cell)
+        self.object = node
         cell = read_cell(node)
         if cell is not None:
             table, index, bit = cell

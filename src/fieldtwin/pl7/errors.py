@@ -15,15 +15,37 @@ from fieldtwin.errors import ConfigError, FieldtwinError
 class Pl7Error(ConfigError):
     """A program refused at load: where, which token, what was expected."""
 
-    def __init__(self, line: int, column: int, token: str, expected: str, source: str = "") -> None:
+    def __init__(
+        self,
+        line: int,
+        column: int,
+        token: str,
+        expected: str,
+        source: str = "",
+        *,
+        said: str | None = None,
+    ) -> None:
+        """``said`` replaces ``expected X`` in the message (``unknown instruction (did
+        you mean CALL?)``)."""
         self.line = line
         self.column = column
         self.token = token
         self.expected = expected
         self.source = source
+        self.said = said
         where = f"{source}: " if source else ""
         shown = "end of file" if token == "" else repr(token)
-        super().__init__(f"{where}line {line}, column {column}: {shown}: expected {expected}")
+        what = said if said is not None else f"expected {expected}"
+        super().__init__(f"{where}line {line}, column {column}: {shown}: {what}")
+
+
+class ObjectRefused(ConfigError):
+    """An object the PLC refused while a sentence was compiled (a module slot that is
+    empty, say): its line and text; the loader adds the column (Executor.from_source)."""
+
+    def __init__(self, line: int, token: str, reason: str) -> None:
+        self.line, self.token, self.reason = line, token, reason
+        super().__init__(f"line {line}: {token!r}: {reason}")
 
 
 class ProgramFault(FieldtwinError):

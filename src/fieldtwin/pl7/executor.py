@@ -36,7 +36,7 @@ from dataclasses import dataclass
 from fieldtwin.pl7 import tree as t
 from fieldtwin.pl7.checker import DEFAULT_LIMITS, Limits, check
 from fieldtwin.pl7.compiler import NEXT, RET, Module, compile_body, compile_condition
-from fieldtwin.pl7.errors import Pl7Error, ProgramFault, WatchdogOverrun
+from fieldtwin.pl7.errors import ObjectRefused, Pl7Error, ProgramFault, WatchdogOverrun
 from fieldtwin.pl7.grafcet import ChartLayout, Grafcet
 from fieldtwin.pl7.memory import ProgramMemory
 from fieldtwin.pl7.parser import parse
@@ -147,9 +147,18 @@ class Executor:
         program = parse(text, source)
         try:
             return cls(program, memory, limits)
+        except ObjectRefused as err:  # where the object stands on its line
+            lines = text.splitlines()
+            line = lines[err.line - 1] if 0 < err.line <= len(lines) else ""
+            column = line.upper().find(err.token.upper()) + 1 if err.token else 0
+            raise Pl7Error(
+                err.line, max(column, 1), err.token, f"an object the PLC has ({err.reason})", source
+            ) from None
         except Pl7Error as err:
             if source and not err.source:
-                raise Pl7Error(err.line, err.column, err.token, err.expected, source) from None
+                raise Pl7Error(
+                    err.line, err.column, err.token, err.expected, source, said=err.said
+                ) from None
             raise
 
     @property

@@ -9,8 +9,10 @@ what was expected.
 from __future__ import annotations
 
 import re
+from difflib import get_close_matches
 
 from fieldtwin.pl7 import tree as t
+from fieldtwin.pl7.errors import Pl7Error
 from fieldtwin.pl7.expressions import TXT_RE, ExpressionParser, assignable
 from fieldtwin.pl7.tokens import Kind, Token, tokenize
 from fieldtwin.pl7.types import BIT, WORD
@@ -263,7 +265,20 @@ class _Parser(ExpressionParser):
             return t.Step(word == "INC", node)
         if tok.kind is Kind.IDENT and word in _KEYWORDS_NOT_STARTING:
             self.fail(_ACTIONS)
-        return self.assignment()
+        try:
+            return self.assignment()
+        except Pl7Error as err:
+            near = get_close_matches(word, _INSTRUCTIONS, n=1, cutoff=0.6) if word else []
+            if near and (err.line, err.column) == (tok.line, tok.column):  # not an object
+                raise Pl7Error(
+                    tok.line,
+                    tok.column,
+                    tok.text,
+                    _ACTIONS,
+                    self.source,
+                    said=f"unknown instruction (did you mean {near[0]}?)",
+                ) from None
+            raise
 
     def txt_op(self, op: str) -> t.TxtOp:
         index, at = self.numbered(TXT_RE, "a Text Block TXTi")
@@ -295,6 +310,11 @@ class _Parser(ExpressionParser):
 
 
 _KEYWORDS_NOT_STARTING = {"THEN", "ELSE", "DO", "EOP", "AND", "OR", "XOR", "REM"}
+# what a misspelt first word of an action is compared with (a near miss is suggested)
+_INSTRUCTIONS = (
+    *("JUMP", "CALL", "RET", "EXCHG", "INPUT", "OUTPUT", "SET", "RESET", "INC", "DEC"),
+    *("IF", "WHILE"),
+)
 
 
 def _with_comments(section: t.Section, comments: tuple[t.Comment, ...]) -> t.Section:
