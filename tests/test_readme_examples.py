@@ -88,11 +88,16 @@ def test_the_tesis_sequence_runs_in_its_order(tmp_path: Path) -> None:
 
 
 def test_run_console_and_tesis_help_end_with_examples(tmp_path: Path) -> None:
-    for command in ("run", "console", "tesis"):
-        done = _fieldtwin([command, "--help"], tmp_path)
+    for command in ("run", "console", "tesis", "replay", "trace", "trace show"):
+        done = _fieldtwin([*command.split(), "--help"], tmp_path)
         assert done.returncode == 0, done.stderr
         tail = done.stdout.rstrip().split("\nexamples:\n")[-1].splitlines()
         assert len(tail) >= 2 and all(line.startswith("  fieldtwin ") for line in tail), (
             command,
             done.stdout,
         )
+    done = _fieldtwin(["diff", "--help"], tmp_path)
+    assert done.stdout.rstrip().split("\nexamples:\n")[-1].startswith("  fieldtwin diff "), (
+        command,
+        done.stdout,
+    )

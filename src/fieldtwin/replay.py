@@ -288,10 +288,24 @@ def diff(a: str | Path, b: str | Path) -> str | None:
 
 
 def add_parsers(sub: Any) -> None:
-    rep = sub.add_parser("replay", help="replay a recording and check every output is the same")
+    rep = sub.add_parser(
+        "replay",
+        help="replay a recording and check every output is the same",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog="examples:\n"
+        "  fieldtwin run plant.toml --record session.ftrec --duration 60 --no-live\n"
+        "  fieldtwin replay session.ftrec                 # exit 0: identical, 1: different\n"
+        "  fieldtwin replay session.ftrec --plant fixed.toml   # the same inputs, another plant",
+    )
     rep.add_argument("recording", help="a file written by fieldtwin run --record")
     rep.add_argument("--plant", help="replay the same inputs against this plant file instead")
-    dif = sub.add_parser("diff", help="compare two recordings")
+    dif = sub.add_parser(
+        "diff",
+        help="compare two recordings",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog="examples:\n"
+        "  fieldtwin diff before.ftrec after.ftrec        # the first difference, or nothing",
+    )
     dif.add_argument("a", help="a recording")
     dif.add_argument("b", help="another recording")
 

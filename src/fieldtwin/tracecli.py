@@ -38,9 +38,23 @@ def _slave(text: str) -> int:
 
 def add_parser(sub: Any) -> None:
     """Add ``trace show`` to the ``fieldtwin`` sub-commands."""
-    trace = sub.add_parser("trace", help="read a traffic trace written by run --trace")
+    examples = (
+        "examples:\n"
+        "  fieldtwin run plant.toml --trace traffic.jsonl --duration 30 --no-live\n"
+        "  fieldtwin trace show traffic.jsonl --slave 2 --function 3\n"
+        "  fieldtwin trace show traffic.jsonl --endpoint tcp://127.0.0.1:5020 | head"
+    )
+    raw = argparse.RawDescriptionHelpFormatter
+    trace = sub.add_parser(
+        "trace",
+        help="read a traffic trace written by run --trace",
+        formatter_class=raw,
+        epilog=examples,
+    )
     verbs = trace.add_subparsers(dest="verb", required=True)
-    show = verbs.add_parser("show", help="print a trace, one line per frame")
+    show = verbs.add_parser(
+        "show", help="print a trace, one line per frame", formatter_class=raw, epilog=examples
+    )
     show.add_argument("file", help="a JSON-lines trace (fieldtwin run --trace FILE)")
     show.add_argument("--endpoint", help="only this endpoint (as the plant file names it)")
     show.add_argument("--slave", type=_slave, help="only frames of this slave number")
