@@ -4,19 +4,26 @@ seeded signals, Allow, and Swagger UI from the package.  A real `fieldtwin run`.
 
 from __future__ import annotations
 
+import json
 import re
 import socket
 import subprocess
 import sys
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any, cast
 
 import httpx
 import pytest
+from fastapi import Request
+from fastapi.exceptions import RequestValidationError
+from pydantic import BaseModel, ValidationError
 from websockets.exceptions import InvalidStatus
 from websockets.sync.client import connect
 
+from fieldtwin.control.app import _validation
 from fieldtwin.control.dashboard import STATIC
+from fieldtwin.control.schemas import ObjectBody, SpeedBody, StepBody
 from tests.control.plantproc import ROOT, Running, default_plant_copy, fieldtwin_run
 
 EVIL = "http://evil.example"
@@ -191,3 +198,27 @@ def test_an_allowed_origin_must_be_an_origin(tmp_path: Path) -> None:
     assert done.returncode == 2, done.stderr
     assert "--allow-origin 'http://x.example/path': not a web origin" in done.stderr
     assert "Traceback" not in done.stderr
+
+
+def _refusal(model: type[BaseModel], body: dict[str, object]) -> dict[str, Any]:
+    try:
+        model.model_validate(body)
+    except ValidationError as exc:
+        errors = [{**e, "loc": ("body", *e["loc"])} for e in exc.errors()]
+        response = _validation(cast(Request, None), RequestValidationError(errors))
+        answer: dict[str, Any] = json.loads(bytes(response.body))
+        return answer
+    raise AssertionError(f"{body} was accepted")
+
+
+def test_a_validation_error_says_what_is_wrong_and_what_is_allowed() -> None:
+    """`error` tells what pydantic found, `allowed` what the field takes, in words."""
+    speed = _refusal(SpeedBody, {"speed": "fast"})
+    assert speed["field"] == "body.speed" and speed["allowed"] == "a number or 'max'", speed
+    assert speed["error"] == 'body.speed: "fast" is not allowed', speed
+    assert _refusal(StepBody, {"ms": -1})["allowed"] == "a value > 0.0"
+    assert _refusal(StepBody, {})["allowed"] == "a value (the field is required)"
+    assert _refusal(StepBody, {})["error"] == "body.ms: required"
+    value = _refusal(ObjectBody, {"value": "ten"})
+    assert value["error"] == 'body.value: "ten" is not allowed', value
+    assert value["allowed"].startswith("a valid integer"), value

@@ -12,7 +12,8 @@ Block), 413 for a body over 64 KiB, 422 for a body that does not fit its schema,
 from __future__ import annotations
 
 import asyncio
-from collections.abc import Callable, Sequence
+import json
+from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import Future
 from typing import Any, TypeVar
 
@@ -62,17 +63,72 @@ def _field(loc: Sequence[object]) -> str:
     return ".".join(parts) or "body"
 
 
+# what a field allows, by the kind of error pydantic found (its ``ctx`` gives bounds)
+_ALLOWS: dict[str, Callable[[dict[str, Any]], str]] = {
+    "float_type": lambda ctx: "a number",
+    "float_parsing": lambda ctx: "a number",
+    "finite_number": lambda ctx: "a finite number",
+    "int_type": lambda ctx: "a whole number",
+    "int_from_float": lambda ctx: "a whole number",
+    "int_parsing": lambda ctx: "a whole number",
+    "bool_type": lambda ctx: "true or false",
+    "string_type": lambda ctx: "a string",
+    "dict_type": lambda ctx: "a JSON object",
+    "model_type": lambda ctx: "a JSON object",
+    "model_attributes_type": lambda ctx: "a JSON object",
+    "list_type": lambda ctx: "a list",
+    "literal_error": lambda ctx: str(ctx.get("expected", "")),
+    "greater_than": lambda ctx: f"a value > {ctx.get('gt')}",
+    "greater_than_equal": lambda ctx: f"a value >= {ctx.get('ge')}",
+    "less_than": lambda ctx: f"a value < {ctx.get('lt')}",
+    "less_than_equal": lambda ctx: f"a value <= {ctx.get('le')}",
+    "string_too_long": lambda ctx: f"at most {ctx.get('max_length')} characters",
+    "string_too_short": lambda ctx: f"at least {ctx.get('min_length')} characters",
+    "too_long": lambda ctx: f"at most {ctx.get('max_length')} items",
+    "too_short": lambda ctx: f"at least {ctx.get('min_length')} items",
+    "missing": lambda ctx: "a value (the field is required)",
+    "extra_forbidden": lambda ctx: "no such field (GET /openapi.json lists the route's fields)",
+    "json_invalid": lambda ctx: "a JSON body",
+}
+
+
+def _allows(error: Mapping[str, Any]) -> str:
+    """What the field allows, said plainly; pydantic's own words where it has no phrase."""
+    phrase = _ALLOWS.get(str(error.get("type", "")))
+    ctx = error.get("ctx")
+    if phrase is not None:
+        return phrase(ctx if isinstance(ctx, dict) else {})
+    said = str(ctx["error"]) if isinstance(ctx, dict) and "error" in ctx else str(error["msg"])
+    return said.removeprefix("Value error, ").removeprefix("Input should be ")
+
+
+def _refused(field: str, error: Mapping[str, Any]) -> str:
+    """What was wrong: the value refused (shortened), or the field missing."""
+    if error.get("type") == "missing":
+        return f"{field}: required"
+    if "input" not in error:
+        return f"{field}: {error.get('msg', 'invalid')}"
+    shown = json.dumps(error["input"], default=str)
+    shown = shown if len(shown) <= 60 else shown[:57] + "..."
+    return f"{field}: {shown} is not allowed"
+
+
 def _validation(request: Request, exc: Exception) -> JSONResponse:
     assert isinstance(exc, RequestValidationError)
     problems: dict[str, list[str]] = {}
+    allows: dict[str, list[str]] = {}
+    first: dict[str, str] = {}
     for error in exc.errors()[:20]:
-        problems.setdefault(_field(error.get("loc", ())), []).append(str(error.get("msg", "")))
-    field, texts = next(iter(problems.items()), ("body", ["invalid"]))
-    allowed = " or ".join(dict.fromkeys(texts))
+        where = _field(error.get("loc", ()))
+        problems.setdefault(where, []).append(str(error.get("msg", "")))
+        allows.setdefault(where, []).append(_allows(error))
+        first.setdefault(where, _refused(where, error))
+    field = next(iter(problems), "body")
+    allowed = " or ".join(dict.fromkeys(allows.get(field, ["a valid body"])))
     return JSONResponse(
         status_code=422,
         content={
-            "error": f"{field}: {allowed}",
+            "error": first.get(field, f"{field}: invalid"),
             "field": field,
             "allowed": allowed,
             "problems": [{"field": f, "problem": " or ".join(t)} for f, t in problems.items()],
