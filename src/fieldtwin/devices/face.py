@@ -295,6 +295,10 @@ class Device(Protocol):
 
     def ports(self) -> list[Port]: ...
 
+    def panel(self) -> FrontPanel:
+        """The front, typed: LEDs, bit rows, words, readings, frozen values, log."""
+        ...
+
 
 def allowed_names(names: list[str]) -> str:
     """``0..7``, ``0..15, a0..a3``, ``0, 1, 0.CTS``: runs of numbered names as ranges."""
@@ -405,3 +409,75 @@ def device_id(device: Device, devices: Sequence[Device]) -> str:
             endpoints.append(a.endpoint)
     index = endpoints.index(address.endpoint)
     return f"tes{address.slave}" if index == 0 else f"tes{address.slave}@{index + 1}"
+
+
+# --- the front panel ---------------------------------------------------------------
+
+PanelValue = bool | int | float | str | None
+
+
+@dataclass(frozen=True, slots=True)
+class Reading:
+    """A value the front shows: a measurement in its unit (an AEM channel in its
+    scaling, a TES analog input in volts), with flags such as ``"overflow"`` or a
+    channel fault, the line a person reads, and the kind's other facts beside
+    (``range``, ``points``...)."""
+
+    name: str
+    value: float | int | None  # None: nothing to show (an inhibited channel)
+    unit: str = ""
+    flags: tuple[str, ...] = ()
+    text: str = ""
+    more: tuple[tuple[str, PanelValue], ...] = ()
+
+
+@dataclass(frozen=True, slots=True)
+class BitRow:
+    """A row of bits on the front (a TES's inputs, its outputs), bit 0 first."""
+
+    name: str
+    bits: tuple[bool, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class PanelWord:
+    """A word the front shows as a number (a TES's watchdog word); None: unreadable."""
+
+    name: str
+    value: int | None
+
+
+@dataclass(frozen=True, slots=True)
+class Logged:
+    """One item a device logged (a DEM's stacked message), formatted once, here."""
+
+    stamp: str  # "1994-07-15 10:00:00.120"
+    kind: str  # "change", "overall"
+    text: str  # "input 3 -> 1"
+    flags: tuple[str, ...] = ()  # "H": the message carries the H bit (DEM 4.2-2)
+
+
+@dataclass(frozen=True, slots=True)
+class FrontPanel:
+    """What a device's front shows, typed: every window renders it, none parses it.
+
+    ``fields`` are the kind's other facts by name (``time``, ``fill``, ``logging``);
+    ``frozen`` the values a device holds until they are read or cleared (a TES's
+    edge counters); ``log`` the newest items it logged, newest first."""
+
+    leds: tuple[tuple[str, LedState], ...]
+    bits: tuple[BitRow, ...] = ()
+    words: tuple[PanelWord, ...] = ()
+    readings: tuple[Reading, ...] = ()
+    frozen: tuple[Reading, ...] = ()
+    fields: tuple[tuple[str, PanelValue], ...] = ()
+    log: tuple[Logged, ...] = ()
+
+    def field(self, name: str, default: PanelValue = None) -> PanelValue:
+        return dict(self.fields).get(name, default)
+
+    def row(self, name: str) -> tuple[bool, ...]:
+        return next((r.bits for r in self.bits if r.name == name), ())
+
+    def word(self, name: str) -> int | None:
+        return next((w.value for w in self.words if w.name == name), None)

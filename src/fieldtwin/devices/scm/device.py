@@ -13,7 +13,15 @@ from collections.abc import Mapping
 from functools import partial
 
 from fieldtwin.devices.context import BuildContext
-from fieldtwin.devices.face import Family, Input, InputValue, Port, PortState
+from fieldtwin.devices.face import (
+    Family,
+    FrontPanel,
+    Input,
+    InputValue,
+    Port,
+    PortState,
+    Reading,
+)
 from fieldtwin.devices.kind import Build, DeviceKind
 from fieldtwin.devices.module import IDENTITY, ModuleDevice, insert_module, own_keys
 from fieldtwin.devices.schema import Key, Schema, Table
@@ -57,6 +65,16 @@ class ScmDevice(ModuleDevice):
         if level is None:
             raise ConfigError(f"{name}: {value!r} not allowed (allowed 0 or 1)")
         self.scm.set_signal(channel, name, level)
+
+    def panel(self) -> FrontPanel:
+        """Its activity and each channel's line as the status shows them."""
+        lines = self.scm.status()
+        channels = tuple(
+            Reading(str(ch), None, text=lines.get(f"channel {ch}", "")) for ch in (0, 1)
+        )
+        return FrontPanel(
+            self.leds(), readings=channels, fields=(("activity", lines.get("activity", "")),)
+        )
 
     def mode(self) -> str | None:
         return None  # SCM 1.2: no Run/Stop mode of its own

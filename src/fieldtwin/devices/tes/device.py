@@ -21,17 +21,21 @@ from pathlib import Path
 from fieldtwin.devices.common import apply_faults, apply_inputs
 from fieldtwin.devices.context import BuildContext
 from fieldtwin.devices.face import (
+    BitRow,
     DeviceStatus,
     Family,
     Fault,
     FaultParam,
+    FrontPanel,
     Input,
     InputValue,
     Output,
     OutputValue,
+    PanelWord,
     Port,
     PortKind,
     PortState,
+    Reading,
     SignalSpec,
     Stream,
     TesAddress,
@@ -290,6 +294,53 @@ class TesDevice:
 
     def ports(self) -> list[Port]:
         return [Port(self.link.value, self.endpoint, GROUP, port_kind(self.endpoint))]
+
+    def panel(self) -> FrontPanel:
+        """Its LEDs, inputs and outputs, edge counters, analog inputs in volts or
+        milliamps with the converter's points (§4.2.4), and the watchdog word (tenths of
+        a second, §6.3), all peeked: a memorized input stays memorized."""
+        tes = self.tes
+        leds = tuple(tes.leds.items())
+        if not tes.powered:
+            return FrontPanel(leds, fields=(("status", ""),))
+        model = tes.model
+        names = {reg.name: reg.address for reg in register_names(model).values()}
+
+        def peek(name: str) -> int:
+            return tes.peek(names[name]) if name in names else 0
+
+        if "direct_io" in names:  # an analog model: bits 0..3 inputs, 8..B outputs (§6.4)
+            direct = peek("direct_io") & 0xF
+        else:
+            direct = peek("direct[0]") | (peek("direct[1]") << 16)
+        bits = (
+            BitRow("in", tuple(bool(direct >> i & 1) for i in range(model.digital_inputs))),
+            BitRow("out", tuple(tes.digital_output(i) for i in range(model.digital_outputs))),
+        )
+        counters = []
+        for i in range(model.digital_inputs):
+            rise, fall = f"counter_rise[{i}]", f"counter_fall[{i}]"
+            if f"{rise}.high" in names:
+                rises = (peek(f"{rise}.high") << 16) | peek(f"{rise}.low")
+                falls = (peek(f"{fall}.high") << 16) | peek(f"{fall}.low")
+                counters.append(Reading(str(i), rises, "rises", more=(("fall", falls),)))
+        unit = model.analog_range.unit
+        analog = []
+        for k in model.analog_inputs:
+            word = peek(f"analog_input[{k}]")
+            points = word - 0x10000 if word & 0x8000 else word
+            more = (("points", points), ("full_scale", model.analog_range.full_scale))
+            level = round(tes.ai.level(k, tes.clock.now), 4)
+            analog.append(Reading(f"a{k}", level, unit, more=more))
+        watchdog = peek("watchdog")
+        return FrontPanel(
+            leds,
+            bits=bits,
+            words=(PanelWord("watchdog", watchdog),),
+            readings=tuple(analog),
+            frozen=tuple(counters),
+            fields=(("status", format_hex(tes.status_word())), ("watchdog_s", watchdog / 10)),
+        )
 
     def label(self) -> str:
         """``TES 1 TES 32EST``: the slave number, then the model (endpoint in status lines)."""
