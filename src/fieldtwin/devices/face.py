@@ -19,7 +19,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Protocol
 
+from fieldtwin.charformat import CharFormat
 from fieldtwin.errors import ConfigError
+from fieldtwin.modbus.model import Link, SlaveDevice
 
 InputValue = bool | float | str  # a contact, a value in the input's unit, or console text
 SignalSpec = Mapping[str, object]  # a plant-file signal table: { kind = "sine", ... }
@@ -255,6 +257,10 @@ class Port:
     endpoint: str
     group: str  # ports with the same group and endpoint share one line ("modbus", "scm")
     kind: PortKind = ANY_PORT  # what the port is, and the line faults that apply to it
+    # how the runtime opens it, by its group: a slave it serves on a shared Modbus
+    # endpoint (SHARED_MODBUS), or the port's own opener (OWN_LINE); see "Ports by kind"
+    modbus: ModbusSlave | None = None
+    opener: Callable[[], Opened] | None = None
 
 
 class Device(Protocol):
@@ -481,3 +487,48 @@ class FrontPanel:
 
     def word(self, name: str) -> int | None:
         return next((w.value for w in self.words if w.name == name), None)
+
+
+def watching(publish: Publish) -> Callable[[], bool]:
+    """Whether anyone looks at what ``publish`` receives now: its ``active`` where the
+    subscriber tells (the runtime's event bus), else always (a stream may skip its
+    work while nobody looks)."""
+    active = getattr(publish, "active", None)
+    if active is None:
+        return lambda: True
+    return lambda: bool(getattr(publish, "active", True))
+
+
+# --- ports by kind: how the runtime opens a port -----------------------------------
+
+SHARED_MODBUS = "modbus"  # slaves served on one endpoint, shared by every port naming it
+OWN_LINE = "scm"  # a port that opens its own line (an SCM channel; the name recordings keep)
+
+
+@dataclass(frozen=True, slots=True)
+class ModbusSlave:
+    """What a port of group SHARED_MODBUS gives the runtime to serve on its endpoint.
+
+    ``line`` is the character format the device is set to (a serial endpoint
+    without its own settings runs at it; every slave of the line must agree on
+    speed and parity), ``settings`` says where a user changes them;
+    ``wire_timing`` asks for the line's real character timing; ``drop_connections``
+    receives the endpoint's function that closes its TCP connections while it is
+    served, None when it closes."""
+
+    slave: SlaveDevice
+    link: Link
+    name: str  # "TES 1 TES 32EST": as errors name it
+    line: CharFormat
+    settings: str  # "rs485.baud / rs485.parity; change them with `fieldtwin tesis`"
+    what: str = "the device"  # "the TES": as errors call it
+    wire_timing: bool = False
+    drop_connections: Callable[[Callable[[], int] | None], None] | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class Opened:
+    """A port a device opened itself: its 'listening: ...' lines and how to close it."""
+
+    lines: tuple[str, ...]
+    close: Callable[[], None]

@@ -14,13 +14,15 @@ Every TES-specific call of the face is in this file.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from functools import partial
 from pathlib import Path
 
+from fieldtwin.charformat import CharFormat, line_settings
 from fieldtwin.devices.common import apply_faults, apply_inputs
 from fieldtwin.devices.context import BuildContext
 from fieldtwin.devices.face import (
+    SHARED_MODBUS,
     BitRow,
     DeviceStatus,
     Family,
@@ -29,6 +31,7 @@ from fieldtwin.devices.face import (
     FrontPanel,
     Input,
     InputValue,
+    ModbusSlave,
     Output,
     OutputValue,
     PanelWord,
@@ -55,9 +58,10 @@ from fieldtwin.tes.faults import fault_catalogue
 from fieldtwin.tes.memmap import register_names, register_table
 from fieldtwin.tes.model import Tes
 from fieldtwin.tes.models import MODELS
+from fieldtwin.tes.state import link_key
 from fieldtwin.words import format_hex, parse_word
 
-GROUP = "modbus"  # TES on one endpoint share one line
+GROUP = SHARED_MODBUS  # TES on one endpoint share one line
 
 # The kinds of port a TES is reached through (by the endpoint's scheme) and the line
 # faults that mean something there: a CRC or a broken character exists only where RTU
@@ -127,6 +131,14 @@ class TesRegisters:
         self._tes.write(self.address(name), value)
 
 
+def tes_line_format(tes: Tes, link: Link) -> CharFormat:
+    """§3.1.3: speed and parity are parameters; 8 data bits and 1 stop bit are fixed."""
+    key = link_key(link)
+    baud, parity = tes.params[f"{key}.baud"], tes.params[f"{key}.parity"]
+    assert isinstance(baud, int) and isinstance(parity, str)
+    return line_settings(baud=baud, data_bits=8, parity=parity, stop_bits=1)
+
+
 class TesDevice:
     """A TES on its endpoint, with the table it came from (for the line checks)."""
 
@@ -136,6 +148,7 @@ class TesDevice:
         self.link = link
         self.table = table
         self.where = where
+        self._dropping: list[Callable[[], int]] = []  # what this face gave the TES to drop
 
     @property
     def kind(self) -> str:
@@ -293,7 +306,31 @@ class TesDevice:
         return TesRegisters(self.tes)
 
     def ports(self) -> list[Port]:
-        return [Port(self.link.value, self.endpoint, GROUP, port_kind(self.endpoint))]
+        tes, link = self.tes, self.link
+        key = link_key(link)
+        slave = ModbusSlave(
+            tes,
+            link,
+            tes.name,
+            tes_line_format(tes, link),
+            f"{key}.baud / {key}.parity; change them with `fieldtwin tesis`",
+            "the TES",
+            tes.wire_timing,
+            self._droppers,
+        )
+        return [Port(link.value, self.endpoint, GROUP, port_kind(self.endpoint), slave)]
+
+    def _droppers(self, drop: Callable[[], int] | None) -> None:
+        """The endpoint's connection dropper while it serves this TES (drop_connections)."""
+        droppers = self.tes.line_faults.droppers
+        if drop is not None:
+            droppers.append(drop)
+            self._dropping.append(drop)
+            return
+        for old in self._dropping:
+            if old in droppers:
+                droppers.remove(old)
+        self._dropping.clear()
 
     def panel(self) -> FrontPanel:
         """Its LEDs, inputs and outputs, edge counters, analog inputs in volts or
