@@ -139,6 +139,23 @@ def tes_line_format(tes: Tes, link: Link) -> CharFormat:
     return line_settings(baud=baud, data_bits=8, parity=parity, stop_bits=1)
 
 
+def modbus_slave(
+    tes: Tes, link: Link, drop: Callable[[Callable[[], int] | None], None] | None = None
+) -> ModbusSlave:
+    """What the runtime serves of ``tes`` on the port ``link`` names (docs/tes.md)."""
+    key = link_key(link)
+    return ModbusSlave(
+        tes,
+        link,
+        tes.name,
+        tes_line_format(tes, link),
+        f"{key}.baud / {key}.parity; change them with `fieldtwin tesis`",
+        "the TES",
+        tes.wire_timing,
+        drop,
+    )
+
+
 class TesDevice:
     """A TES on its endpoint, with the table it came from (for the line checks)."""
 
@@ -307,17 +324,7 @@ class TesDevice:
 
     def ports(self) -> list[Port]:
         tes, link = self.tes, self.link
-        key = link_key(link)
-        slave = ModbusSlave(
-            tes,
-            link,
-            tes.name,
-            tes_line_format(tes, link),
-            f"{key}.baud / {key}.parity; change them with `fieldtwin tesis`",
-            "the TES",
-            tes.wire_timing,
-            self._droppers,
-        )
+        slave = modbus_slave(tes, link, self._droppers)
         return [Port(link.value, self.endpoint, GROUP, port_kind(self.endpoint), slave)]
 
     def _droppers(self, drop: Callable[[], int] | None) -> None:
