@@ -35,7 +35,6 @@ from fieldtwin.console_syntax import (
 from fieldtwin.console_trace import USAGE as TRACE_USAGE
 from fieldtwin.console_trace import ConsoleTrace
 from fieldtwin.devices.face import Device, DeviceStatus, ModuleAddress
-from fieldtwin.devices.tes import TesDevice
 from fieldtwin.errors import ConfigError, FieldtwinError
 from fieldtwin.live import tes_line
 from fieldtwin.plant import Plant
@@ -416,7 +415,7 @@ class Console:
             raise ConfigError(f"tes: {' '.join(args[1:])!r} not understood ({HELP['tes']})")
         return words[2](self, device, head, rest)
 
-    def _tes_read(self, device: TesDevice, head: str, rest: list[str], peek: bool) -> list[str]:
+    def _tes_read(self, device: Device, head: str, rest: list[str], peek: bool) -> list[str]:
         start = parse_word(rest[0])
         count = integer(rest[1], "tes read N") if len(rest) > 1 else 1
         if not 1 <= count <= 256:
@@ -428,20 +427,20 @@ class Console:
             for a in range(start, start + count)
         ]
 
-    def _tes_write(self, device: TesDevice, head: str, rest: list[str]) -> list[str]:
+    def _tes_write(self, device: Device, head: str, rest: list[str]) -> list[str]:
         address, value = parse_word(rest[0]), parse_word(rest[1])
         device.objects().write(str(address), value)
         return [
             f"{head} {format_hex(address, 3)} = {format_hex(device.objects().peek(str(address)))}"
         ]
 
-    def _tes_power_cycle(self, device: TesDevice, head: str, rest: list[str]) -> list[str]:
+    def _tes_power_cycle(self, device: Device, head: str, rest: list[str]) -> list[str]:
         device.fault("power_off").set()
         device.fault("power_off").clear()
         return [f"{head} power cycled"]
 
     _TES_VERBS: ClassVar[
-        dict[str, tuple[int, int, Callable[[Console, TesDevice, str, list[str]], list[str]]]]
+        dict[str, tuple[int, int, Callable[[Console, Device, str, list[str]], list[str]]]]
     ] = {
         "read": (1, 2, lambda c, d, h, r: c._tes_read(d, h, r, peek=False)),
         "peek": (1, 2, lambda c, d, h, r: c._tes_read(d, h, r, peek=True)),

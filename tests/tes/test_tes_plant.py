@@ -10,9 +10,8 @@ import pytest
 
 from fieldtwin.clock import SimClock
 from fieldtwin.errors import ConfigError
-from fieldtwin.facade.tes import build_tes
+from fieldtwin.facade.tes import build_tes, line_settings
 from fieldtwin.modbus.model import Link
-from fieldtwin.runtime.tes_lines import line_settings
 from fieldtwin.tes import Tes
 from fieldtwin.transports.url import parse_endpoint
 

@@ -9,11 +9,10 @@ import pytest
 
 from fieldtwin.clock import SimClock
 from fieldtwin.errors import ConfigError
-from fieldtwin.facade.tes import build_tes
+from fieldtwin.facade.tes import build_tes, serve_group
 from fieldtwin.modbus.line import RtuLine
 from fieldtwin.modbus.model import Link
 from fieldtwin.runtime.runner import Runner
-from fieldtwin.runtime.tes_lines import serve_group
 from fieldtwin.transports.url import parse_endpoint
 
 

@@ -12,22 +12,16 @@ peeks: nothing it reads has a side effect (a TES's memorized inputs stay).
 
 from __future__ import annotations
 
-import re
-
 from fieldtwin.control.resources import Control, fault_json, output_json
-from fieldtwin.devices.dem24 import Dem24Device
-from fieldtwin.devices.face import Device, TesAddress
+from fieldtwin.devices.face import Device, FrontPanel, Logged, Reading, TesAddress
 from fieldtwin.devices.module import ModuleDevice
-from fieldtwin.devices.tes import TesDevice
 from fieldtwin.errors import FieldtwinError
-from fieldtwin.tsx.dem24.stack import Message, MessageType
 from fieldtwin.tsx.discrete.module import DiscreteInputs, DiscreteOutputs
 from fieldtwin.tsx.plc import Plc
 from fieldtwin.words import format_hex
 
 Json = dict[str, object]
 LAST_MESSAGES = 8  # a DEM's newest stacked messages shown (DEM 4.2-2 layout)
-TES_POINTS_MAX = 1023  # TES §4.2.4: the converter's 0..1023 points over the full scale
 
 
 def panels(control: Control) -> Json:
@@ -84,15 +78,10 @@ def _bits(plc: Plc, prefix: str, count: int) -> int | None:
     return value
 
 
-def _signed(value: object) -> int | None:
-    if not isinstance(value, int):
-        return None
-    return value - 0x10000 if value & 0x8000 else value
-
-
 def module_panel(device: ModuleDevice, plc: Plc, ident: str) -> Json:
     """One module's front: LEDs, I,S, the discrete bits, IW/OW words, decoded fields."""
     status = device.status()
+    panel = device.panel()
     module = device.module
     a = device.address
     entry = plc.slot_entry(a.rack, a.slot)
@@ -118,7 +107,8 @@ def module_panel(device: ModuleDevice, plc: Plc, ident: str) -> Json:
         "iw": [_word(plc, f"IW{a},{i}") for i in range(8)],
         "ow": [_word(plc, f"OW{a},{i}") for i in range(8)],
         "details": details,
-        "decoded": _decoded(device, details),
+        "decoded": _decoded(panel),
+        "panel": panel_json(panel),
         "inputs": list(device.inputs()),
         "faults": [fault_json(f) for f in device.faults().values()],
         "active_faults": [f.text() for f in status.active_faults],
@@ -127,75 +117,47 @@ def module_panel(device: ModuleDevice, plc: Plc, ident: str) -> Json:
     return out
 
 
-def _decoded(device: ModuleDevice, details: dict[str, str]) -> Json:
-    """What the kind's words mean, from its own status lines (and a DEM's stack)."""
-    kind = device.kind
-    if kind.startswith("TSX AEM"):
-        return {
-            "channels": [_aem_channel(ch, details.get(f"channel {ch}", "")) for ch in range(8)],
-            "configuration": details.get("configuration", ""),
-            "sampling": details.get("sampling", ""),
-        }
-    if isinstance(device, Dem24Device):
-        stack = device.dem.stack
-        messages = stack.peek()[-LAST_MESSAGES:]
-        return {
-            "time": details.get("time", ""),
-            "stack": details.get("stack", ""),
-            "fill": len(stack),
-            "size": stack.size,
-            "overflow": stack.total_lost > 0 or stack.lost > 0,
-            "lost": stack.total_lost,
-            "logging": details.get("logging", ""),
-            "sync_fault": details.get("sync fault", ""),
-            "messages": [_message(m) for m in reversed(messages)],
-        }
-    if kind.startswith("TSX SCM"):
-        return {
-            "activity": details.get("activity", ""),
-            "channels": [
-                {"channel": ch, "text": details.get(f"channel {ch}", "")} for ch in (0, 1)
-            ],
-        }
-    return {}
+def _decoded(panel: FrontPanel) -> Json:
+    """What the kind's words mean, as its typed front gives them: its fields by name,
+    its readings as ``channels``, its log as ``messages`` (newest first)."""
+    out: Json = dict(panel.fields)
+    if panel.readings:
+        out["channels"] = [reading_json(r) for r in panel.readings]
+    if panel.log:
+        out["messages"] = [logged_json(x) for x in panel.log[:LAST_MESSAGES]]
+    return out
 
 
-def _aem_channel(channel: int, text: str) -> Json:
-    """``4/20 mA, user 0..10000; = 5538; thresholds 1000/8000 bits 10``: the measurement
-    (in the configured scaling), the range and the threshold bits, from the status line."""
-    value = re.search(r"; = (-?\d+)", text)
-    bits = re.search(r"bits ([01]{2})", text)
+def reading_json(reading: Reading) -> Json:
+    """A reading as the page draws it; a numbered one also as ``channel``/``input``."""
+    name = reading.name
+    number: object = int(name) if name.isdigit() else name
     return {
-        "channel": channel,
-        "text": text,
-        "value": int(value.group(1)) if value else None,
-        "range": text.split(",")[0].strip(),
-        "sqrt": "sqrt" in text,
-        "threshold_bits": bits.group(1) if bits else None,
+        "channel": number,
+        "name": name,
+        "text": reading.text,
+        "value": reading.value,
+        "unit": reading.unit,
+        "flags": list(reading.flags),
+        **dict(reading.more),
     }
 
 
-def _message(message: Message) -> Json:
-    s = message.stamp
-    stamp = (
-        f"{s.year:04d}-{s.month:02d}-{s.day:02d} {s.hour:02d}:{s.minute:02d}:{s.second:02d}"
-        f".{s.ms:03d}"
-    )
-    if message.type is MessageType.CHANGE:
-        what = f"input {message.channel} -> {message.state}"
-    else:
-        states = message.body[4] | ((message.body[5] & 0xFF) << 16)
-        what = f"overall inputs H'{states:06X}'"
-    return {"stamp": stamp, "type": message.type.name.lower(), "what": what, "h": message.h}
+def logged_json(item: Logged) -> Json:
+    return {"stamp": item.stamp, "type": item.kind, "what": item.text, "h": "H" in item.flags}
 
 
-def _names(device: Device) -> dict[str, str]:
-    """A TES word's map name -> its address (``direct[0]`` -> ``H'005'``)."""
-    found = {}
-    for entry in device.objects().names():
-        address, _, name = entry.partition(" ")
-        found[name] = address
-    return found
+def panel_json(panel: FrontPanel) -> Json:
+    """The typed front as it is, for a page that draws any kind (a made-up one too)."""
+    return {
+        "leds": [[name, state] for name, state in panel.leds],
+        "bits": [{"name": r.name, "bits": list(r.bits)} for r in panel.bits],
+        "words": [{"name": w.name, "value": w.value} for w in panel.words],
+        "readings": [reading_json(r) for r in panel.readings],
+        "frozen": [reading_json(r) for r in panel.frozen],
+        "fields": dict(panel.fields),
+        "log": [logged_json(x) for x in panel.log],
+    }
 
 
 def tes_panel(device: Device, ident: str, now: int) -> Json:
@@ -216,56 +178,28 @@ def tes_panel(device: Device, ident: str, now: int) -> Json:
         # every analog output in the device's units (volts, milliamps), the word beside
         "analog_outputs": [output_json(o) for o in status.outputs if not isinstance(o.value, bool)],
     }
-    if not isinstance(device, TesDevice) or status.state == "off":
+    panel = device.panel()
+    out["panel"] = panel_json(panel)
+    if status.state == "off":
         return {**out, "inputs": [], "outputs": [], "counters": [], "analog": [], "watchdog": None}
-    tes = device.tes
-    model = tes.model
-    names = _names(device)
-    objects = device.objects()
-
-    def peek(name: str) -> int:
-        return objects.peek(names[name]) if name in names else 0
-
-    if "direct_io" in names:  # an analog model: bits 0..3 inputs, 8..B outputs (§6.4)
-        direct = peek("direct_io") & 0xF
-    else:
-        direct = peek("direct[0]") | (peek("direct[1]") << 16)
-    inputs = [bool(direct >> i & 1) for i in range(model.digital_inputs)]
-    outputs = [tes.digital_output(i) for i in range(model.digital_outputs)]
-    counters = []
-    for i in range(model.digital_inputs):
-        rise, fall = f"counter_rise[{i}]", f"counter_fall[{i}]"
-        if f"{rise}.high" in names:
-            counters.append(
-                {
-                    "input": i,
-                    "rise": (peek(f"{rise}.high") << 16) | peek(f"{rise}.low"),
-                    "fall": (peek(f"{fall}.high") << 16) | peek(f"{fall}.low"),
-                }
-            )
-    unit = model.analog_range.unit
-    analog = []
-    for k in model.analog_inputs:
-        word = peek(f"analog_input[{k}]")
-        analog.append(
-            {
-                "input": f"a{k}",
-                "level": round(tes.ai.level(k, now), 4),
-                "unit": unit,
-                "points": _signed(word),
-                "full_scale": model.analog_range.full_scale,
-            }
-        )
-    watchdog = peek("watchdog")
+    watchdog = panel.word("watchdog")
     return {
         **out,
-        "inputs": inputs,
-        "outputs": outputs,
-        "counters": counters,
-        "analog": analog,
-        "watchdog": {
+        "inputs": list(panel.row("in")),
+        "outputs": list(panel.row("out")),
+        "counters": [
+            {"input": int(c.name), "rise": c.value, **{k: v for k, v in c.more}}
+            for c in panel.frozen
+        ],
+        "analog": [
+            {"input": r.name, "level": r.value, "unit": r.unit, **dict(r.more)}
+            for r in panel.readings
+        ],
+        "watchdog": None
+        if watchdog is None
+        else {
             "word": watchdog,
-            "seconds": watchdog / 10,
+            "seconds": panel.field("watchdog_s"),
             "led": dict(status.leds).get("Wdg", "off"),
         },
     }

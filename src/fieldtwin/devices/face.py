@@ -19,7 +19,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Protocol
 
+from fieldtwin.charformat import CharFormat
 from fieldtwin.errors import ConfigError
+from fieldtwin.modbus.model import Link, SlaveDevice
 
 InputValue = bool | float | str  # a contact, a value in the input's unit, or console text
 SignalSpec = Mapping[str, object]  # a plant-file signal table: { kind = "sine", ... }
@@ -255,6 +257,10 @@ class Port:
     endpoint: str
     group: str  # ports with the same group and endpoint share one line ("modbus", "scm")
     kind: PortKind = ANY_PORT  # what the port is, and the line faults that apply to it
+    # how the runtime opens it, by its group: a slave it serves on a shared Modbus
+    # endpoint (SHARED_MODBUS), or the port's own opener (OWN_LINE); see "Ports by kind"
+    modbus: ModbusSlave | None = None
+    opener: Callable[[], Opened] | None = None
 
 
 class Device(Protocol):
@@ -294,6 +300,10 @@ class Device(Protocol):
     def objects(self) -> Objects: ...
 
     def ports(self) -> list[Port]: ...
+
+    def panel(self) -> FrontPanel:
+        """The front, typed: LEDs, bit rows, words, readings, frozen values, log."""
+        ...
 
 
 def allowed_names(names: list[str]) -> str:
@@ -405,3 +415,120 @@ def device_id(device: Device, devices: Sequence[Device]) -> str:
             endpoints.append(a.endpoint)
     index = endpoints.index(address.endpoint)
     return f"tes{address.slave}" if index == 0 else f"tes{address.slave}@{index + 1}"
+
+
+# --- the front panel ---------------------------------------------------------------
+
+PanelValue = bool | int | float | str | None
+
+
+@dataclass(frozen=True, slots=True)
+class Reading:
+    """A value the front shows: a measurement in its unit (an AEM channel in its
+    scaling, a TES analog input in volts), with flags such as ``"overflow"`` or a
+    channel fault, the line a person reads, and the kind's other facts beside
+    (``range``, ``points``...)."""
+
+    name: str
+    value: float | int | None  # None: nothing to show (an inhibited channel)
+    unit: str = ""
+    flags: tuple[str, ...] = ()
+    text: str = ""
+    more: tuple[tuple[str, PanelValue], ...] = ()
+
+
+@dataclass(frozen=True, slots=True)
+class BitRow:
+    """A row of bits on the front (a TES's inputs, its outputs), bit 0 first."""
+
+    name: str
+    bits: tuple[bool, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class PanelWord:
+    """A word the front shows as a number (a TES's watchdog word); None: unreadable."""
+
+    name: str
+    value: int | None
+
+
+@dataclass(frozen=True, slots=True)
+class Logged:
+    """One item a device logged (a DEM's stacked message), formatted once, here."""
+
+    stamp: str  # "1994-07-15 10:00:00.120"
+    kind: str  # "change", "overall"
+    text: str  # "input 3 -> 1"
+    flags: tuple[str, ...] = ()  # "H": the message carries the H bit (DEM 4.2-2)
+
+
+@dataclass(frozen=True, slots=True)
+class FrontPanel:
+    """What a device's front shows, typed: every window renders it, none parses it.
+
+    ``fields`` are the kind's other facts by name (``time``, ``fill``, ``logging``);
+    ``frozen`` the values a device holds until they are read or cleared (a TES's
+    edge counters); ``log`` the newest items it logged, newest first."""
+
+    leds: tuple[tuple[str, LedState], ...]
+    bits: tuple[BitRow, ...] = ()
+    words: tuple[PanelWord, ...] = ()
+    readings: tuple[Reading, ...] = ()
+    frozen: tuple[Reading, ...] = ()
+    fields: tuple[tuple[str, PanelValue], ...] = ()
+    log: tuple[Logged, ...] = ()
+
+    def field(self, name: str, default: PanelValue = None) -> PanelValue:
+        return dict(self.fields).get(name, default)
+
+    def row(self, name: str) -> tuple[bool, ...]:
+        return next((r.bits for r in self.bits if r.name == name), ())
+
+    def word(self, name: str) -> int | None:
+        return next((w.value for w in self.words if w.name == name), None)
+
+
+def watching(publish: Publish) -> Callable[[], bool]:
+    """Whether anyone looks at what ``publish`` receives now: its ``active`` where the
+    subscriber tells (the runtime's event bus), else always (a stream may skip its
+    work while nobody looks)."""
+    active = getattr(publish, "active", None)
+    if active is None:
+        return lambda: True
+    return lambda: bool(getattr(publish, "active", True))
+
+
+# --- ports by kind: how the runtime opens a port -----------------------------------
+
+SHARED_MODBUS = "modbus"  # slaves served on one endpoint, shared by every port naming it
+OWN_LINE = "scm"  # a port that opens its own line (an SCM channel; the name recordings keep)
+
+
+@dataclass(frozen=True, slots=True)
+class ModbusSlave:
+    """What a port of group SHARED_MODBUS gives the runtime to serve on its endpoint.
+
+    ``line`` is the character format the device is set to (a serial endpoint
+    without its own settings runs at it; every slave of the line must agree on
+    speed and parity), ``settings`` says where a user changes them;
+    ``wire_timing`` asks for the line's real character timing; ``drop_connections``
+    receives the endpoint's function that closes its TCP connections while it is
+    served, None when it closes."""
+
+    slave: SlaveDevice
+    link: Link
+    name: str  # "TES 1 TES 32EST": as errors name it
+    line: CharFormat
+    settings: str  # "rs485.baud / rs485.parity; change them with `fieldtwin tesis`"
+    what: str = "the device"  # "the TES": as errors call it
+    wire_timing: bool = False
+    drop_connections: Callable[[Callable[[], int] | None], None] | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class Opened:
+    """A port a device opened itself: its 'listening: ...' lines and how to close it."""
+
+    lines: tuple[str, ...]
+    close: Callable[[], None]

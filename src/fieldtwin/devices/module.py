@@ -20,6 +20,7 @@ from fieldtwin.devices.face import (
     Family,
     Fault,
     FaultParam,
+    FrontPanel,
     Input,
     InputValue,
     ModuleAddress,
@@ -201,6 +202,10 @@ class ModuleDevice:
 
     def ports(self) -> list[Port]:
         return []
+
+    def panel(self) -> FrontPanel:
+        """The LEDs and the core's status lines (a kind's adapter shows more)."""
+        return FrontPanel(self.leds(), fields=tuple(self.module.status().items()))
 
     # --- plant file -----------------------------------------------------------
 

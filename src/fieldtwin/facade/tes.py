@@ -10,6 +10,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from fieldtwin.devices.tes.device import modbus_slave
 from fieldtwin.devices.tes.plantkeys import (
     KEYS,
     build_one,
@@ -20,10 +21,25 @@ from fieldtwin.devices.tes.plantkeys import (
     wire_timing_of,
 )
 from fieldtwin.endpoint import parse_endpoint
+from fieldtwin.modbus.model import Link
+from fieldtwin.runtime import modbus_lines
 from fieldtwin.runtime.modbus_server import ModbusServer
 from fieldtwin.runtime.runner import Runner
-from fieldtwin.runtime.tes_lines import serve_group
 from fieldtwin.tes.model import Tes
+from fieldtwin.transports.base import LineSettings
+from fieldtwin.transports.url import Endpoint
+
+
+def line_settings(endpoint: Endpoint, devices: Sequence[Tes], link: Link) -> LineSettings:
+    """The line's format: the endpoint's, else the TES's; every TES must agree with it."""
+    return modbus_lines.line_settings(endpoint, [modbus_slave(t, link) for t in devices])
+
+
+def serve_group(
+    runner: Runner, endpoint: Endpoint, devices: Sequence[Tes], link: Link
+) -> ModbusServer:
+    """Serve ``devices`` (TES on one endpoint, reached through the port ``link`` names)."""
+    return modbus_lines.serve_group(runner, endpoint, [modbus_slave(t, link) for t in devices])
 
 
 def start_tes_endpoints(
@@ -54,7 +70,9 @@ __all__ = [
     "build_tes",
     "check_lines",
     "endpoint_of",
+    "line_settings",
     "link_of",
+    "serve_group",
     "start_tes_endpoints",
     "wire_timing_of",
 ]

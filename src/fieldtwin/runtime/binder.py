@@ -1,18 +1,22 @@
 """The one endpoint binder: every port of every device is opened here, after the plant is built.
 
-A device lists its ports (:meth:`fieldtwin.devices.face.Device.ports`); a port
-belongs to a group that says how it is opened:
+A device lists its ports (:meth:`fieldtwin.devices.face.Device.ports`); a port's
+group says how the runtime opens it, and the port carries what that takes
+(docs/architecture.md, "Ports by kind"):
 
-* ``modbus`` (a TES): every TES naming the same endpoint shares one line, served
-  by the Modbus server glue (fieldtwin.runtime.tes_lines: TCP, RTU over TCP, pty, serial);
-* ``scm`` (an SCM channel): the channel's own raw-character line, opened by the
-  SCM's endpoint functions (fieldtwin.tsx.scm.endpoints, through the module's
-  ``attach``), pumped by the PLC's runner.
+* ``modbus`` (SHARED_MODBUS): every port naming the same endpoint shares one
+  line, served by the Modbus server glue (fieldtwin.runtime.modbus_lines: TCP,
+  RTU over TCP, pty, serial); each port gives its slave (``Port.modbus``);
+* ``scm`` (OWN_LINE): a port that opens its own line (an SCM channel's raw
+  characters, pumped by the PLC's runner) through ``Port.opener``.
 
-Given the plant's event bus, every port opened publishes its traffic on it
-(Modbus frames through the server's wiretap, SCM characters through the
-channel's port).  ``fieldtwin run`` binds every group; ``load_plant`` (and so the console) binds
-the ``scm`` group only, leaving the TES's Modbus endpoints closed.
+A group without an opener here is the device's own business (a made-up device's
+loop): the binder leaves it alone.  Given the plant's event bus, every Modbus
+endpoint opened publishes its frames on it (the server's wiretap), and every
+stream a device offers (:meth:`~fieldtwin.devices.face.Device.streams`: a DEM's
+messages, an SCM's characters) is published there.  ``fieldtwin run`` binds every
+group; ``load_plant`` (and so the console) binds the ``scm`` group only, leaving
+the Modbus endpoints closed.  Nothing here knows a device kind.
 """
 
 from __future__ import annotations
@@ -20,19 +24,15 @@ from __future__ import annotations
 from collections.abc import Callable, Collection, Mapping, Sequence
 from functools import partial
 
-from fieldtwin.devices.face import Device, Port
-from fieldtwin.devices.scm import GROUP as SERIAL_LINE
-from fieldtwin.devices.scm import ScmDevice
-from fieldtwin.devices.tes import GROUP as MODBUS
-from fieldtwin.devices.tes import TesDevice
+from fieldtwin.devices.face import OWN_LINE, SHARED_MODBUS, Device, ModbusSlave
 from fieldtwin.errors import ConfigError
 from fieldtwin.runtime.events import EventBus
 from fieldtwin.runtime.modbus_server import ModbusServer
 from fieldtwin.runtime.runner import Runner
-from fieldtwin.runtime.wiretap import CharTap
 from fieldtwin.transports.url import parse_endpoint
-from fieldtwin.tsx.scm.endpoints import MemoryPeer
 
+MODBUS = SHARED_MODBUS
+SERIAL_LINE = OWN_LINE
 ALL = (MODBUS, SERIAL_LINE)
 
 
@@ -53,6 +53,9 @@ class Binding:
             close()
 
 
+Opener = Callable[[Sequence[Device], "Runner | None", Binding, "EventBus | None"], None]
+
+
 def bind(
     devices: Sequence[Device],
     runner: Runner | None,
@@ -60,16 +63,15 @@ def bind(
     groups: Collection[str] = ALL,
     events: EventBus | None = None,
 ) -> Binding:
-    """Open the ports of ``devices`` in ``groups`` (TES groups first, then SCM channels);
-    with ``events``, their traffic is published there."""
+    """Open the ports of ``devices`` in ``groups`` (shared Modbus endpoints first, then
+    the ports that open their own line); with ``events``, their traffic is published there."""
     binding = Binding()
     try:
-        if MODBUS in groups:
-            _serve_modbus(devices, runner, binding, events)
-        if SERIAL_LINE in groups:
-            _attach_channels(devices, binding, events)
-            if events is not None:  # the modules' group: bound once per plant
-                _tap_streams(devices, binding, events)
+        for group, opener in OPENERS.items():
+            if group in groups:
+                opener(devices, runner, binding, events)
+        if SERIAL_LINE in groups and events is not None:  # once per plant, after the lines
+            _tap_streams(devices, binding, events)
     except BaseException:
         binding.close()
         raise
@@ -79,72 +81,67 @@ def bind(
 def _serve_modbus(
     devices: Sequence[Device], runner: Runner | None, binding: Binding, events: EventBus | None
 ) -> None:
-    from fieldtwin.runtime.tes_lines import serve_group
+    from fieldtwin.runtime.modbus_lines import serve_group
 
-    lines: dict[str, list[TesDevice]] = {}
+    lines: dict[str, list[ModbusSlave]] = {}
     for device in devices:
-        if isinstance(device, TesDevice):
-            for port in device.ports():
-                lines.setdefault(port.endpoint, []).append(device)
+        for port in device.ports():
+            if port.group == MODBUS and port.modbus is not None:
+                lines.setdefault(port.endpoint, []).append(port.modbus)
     if lines and runner is None:
-        raise ConfigError("a TES endpoint needs the real-time runner (fieldtwin run)")
+        raise ConfigError("a Modbus endpoint needs the real-time runner (fieldtwin run)")
     for url, members in lines.items():
         assert runner is not None
-        # the plant builder checked that every TES on one endpoint names the same port
-        server: ModbusServer = serve_group(
-            runner, parse_endpoint(url), [d.tes for d in members], members[0].link
-        )
+        # the plant builder checked that every slave on one endpoint names the same port
+        server: ModbusServer = serve_group(runner, parse_endpoint(url), members)
         if events is not None:
             server.tap(events, url)
         binding.add([server.describe()], server.close)
         if server.kind != "modbus-rtu":  # a TCP endpoint: the drop_connections fault
             for member in members:
-                droppers = member.tes.line_faults.droppers
-                droppers.append(server.drop_connections)
-                binding.add([], partial(droppers.remove, server.drop_connections))
+                if member.drop_connections is not None:
+                    member.drop_connections(server.drop_connections)
+                    binding.add([], partial(member.drop_connections, None))
 
 
-def _attach_channels(devices: Sequence[Device], binding: Binding, events: EventBus | None) -> None:
+def _open_own_lines(
+    devices: Sequence[Device], runner: Runner | None, binding: Binding, events: EventBus | None
+) -> None:
     for device in devices:
-        if not isinstance(device, ScmDevice):
-            continue
         for port in device.ports():
-            binding.add(device.bind(port, None), _detacher(device, port))
-        if events is not None:
-            _tap_channels(device, events)
+            if port.group == SERIAL_LINE and port.opener is not None:
+                opened = port.opener()
+                binding.add(opened.lines, opened.close)
 
 
-def _tap_channels(device: ScmDevice, events: EventBus) -> None:
-    """Every wired channel (memory ones were wired when the module was built)."""
-    for channel, wired in enumerate(device.scm.ports):
-        if wired is None:
-            continue
-        clock = device.scm.ctx.clock
-        tap = CharTap(events, clock, str(device.address), channel, wired.url.split("?")[0])
-        wired.tap = tap
-        if isinstance(wired.peer, MemoryPeer):
-            wired.peer.tap = tap
+OPENERS: dict[str, Opener] = {MODBUS: _serve_modbus, SERIAL_LINE: _open_own_lines}
 
 
 def _tap_streams(devices: Sequence[Device], binding: Binding, events: EventBus) -> None:
-    """Every stream a device's face offers (a DEM's messages...) is published on the bus."""
+    """Every stream a device's face offers (a DEM's messages, an SCM's characters...)
+    is published on the bus."""
     for device in devices:
         source = str(device.address)
         for stream in device.streams():
-            stop = stream.subscribe(partial(_publish, events, stream.kind, source))
+            stop = stream.subscribe(_Publisher(events, stream.kind, source))
             binding.add([], stop)
 
 
-def _publish(
-    events: EventBus, kind: str, source: str, now: int, data: Mapping[str, object]
-) -> None:
-    if events.active:
-        events.publish(now, kind, source, dict(data))
+class _Publisher:
+    """``publish(now, data)`` onto the bus, and whether anyone looks (``active``)."""
+
+    def __init__(self, events: EventBus, kind: str, source: str) -> None:
+        self._events = events
+        self._kind = kind
+        self._source = source
+
+    @property
+    def active(self) -> bool:
+        return self._events.active
+
+    def __call__(self, now: int, data: Mapping[str, object]) -> None:
+        if self._events.active:
+            self._events.publish(now, self._kind, self._source, dict(data))
 
 
-def _detacher(device: ScmDevice, port: Port) -> Callable[[], None]:
-    channel = int(port.name.split()[-1])
-    return lambda: device.scm.detach(channel)
-
-
-__all__ = ["ALL", "MODBUS", "SERIAL_LINE", "Binding", "bind"]
+__all__ = ["ALL", "MODBUS", "OPENERS", "SERIAL_LINE", "Binding", "bind"]

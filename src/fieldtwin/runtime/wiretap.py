@@ -14,9 +14,10 @@ per block the line delivered.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Mapping
 
-from fieldtwin.clock import MS, Handle, SimClock
+from fieldtwin.clock import MS, SimClock
+from fieldtwin.devices.chars import KIND_SERIAL, CharBlocks
 from fieldtwin.errors import ProtocolError
 from fieldtwin.modbus.crc import crc_ok
 from fieldtwin.modbus.mbap import MbapDecoder
@@ -44,11 +45,8 @@ from fieldtwin.modbus.timing import RtuTiming
 from fieldtwin.runtime.events import EventBus
 
 KIND_MODBUS = "modbus"
-KIND_SERIAL = "serial"
 KIND_REGISTER = "register"
 IN, OUT = "in", "out"
-MAX_BLOCK = 1024  # characters of one SCM block an event carries (the count says the rest)
-BLOCK_GAP_US = 5 * MS  # a quieter line ends an SCM block (about 4 characters at 9600 Bd)
 MAX_PENDING = 256  # requests remembered per connection to pair their replies
 
 FUNCTION_NAMES = {
@@ -356,68 +354,19 @@ class Wiretap:
         self.bus.publish(t_us, KIND_MODBUS, device, data)
 
 
-class CharTap:
-    """Publishes the characters of one SCM channel, in and out, in blocks.
-
-    A channel sends one character at a time; characters in the same direction
-    less than BLOCK_GAP_US apart make one block, published when the line has
-    been quiet that long in that direction (a clock event of the tap's own:
-    it only publishes), when the direction turns, or at MAX_BLOCK characters.
-    """
+class CharTap(CharBlocks):
+    """Publishes the characters of one SCM channel, in and out, in blocks, on ``bus``
+    (fieldtwin.devices.chars: an SCM's own stream publishes the same way)."""
 
     def __init__(
         self, bus: EventBus, clock: SimClock, device: str, channel: int, line: str
     ) -> None:
         self.bus = bus
-        self._clock = clock
         self.device = device
-        self.channel = channel
-        self.line = line
-        self._blocks: dict[str, tuple[int, int, bytearray]] = {}  # dir -> (start, last, chars)
-        self._timers: dict[str, Handle] = {}
+        super().__init__(clock, channel, line, self._to_bus, lambda: bus.active)
 
-    @property
-    def active(self) -> bool:
-        return self.bus.active
-
-    def chars(self, direction: str, data: bytes, now: int | None = None) -> None:
-        t_us = self._clock.now if now is None else now
-        block = self._blocks.get(direction)
-        if block is not None and (t_us - block[1] > BLOCK_GAP_US or len(block[2]) >= MAX_BLOCK):
-            self.flush(direction)
-            block = None
-        if block is None:
-            block = (t_us, t_us, bytearray())
-        self._blocks[direction] = (block[0], t_us, block[2] + data)
-        timer = self._timers.pop(direction, None)
-        if timer is not None:
-            timer.cancel()
-        flush_at = max(t_us + BLOCK_GAP_US, self._clock.now)
-        self._timers[direction] = self._clock.schedule(flush_at, self._flusher(direction))
-
-    def _flusher(self, direction: str) -> Callable[[int], None]:
-        return lambda now: self.flush(direction)
-
-    def flush(self, direction: str) -> None:
-        """Publish the block waiting in ``direction`` (if any)."""
-        block = self._blocks.pop(direction, None)
-        timer = self._timers.pop(direction, None)
-        if timer is not None:
-            timer.cancel()
-        if block is None:
-            return
-        start, _, data = block
-        fields: dict[str, object] = {
-            "endpoint": self.line,
-            "channel": self.channel,
-            "dir": direction,
-            "count": len(data),
-            "hex": bytes(data[:MAX_BLOCK]).hex(),
-            "text": bytes(data[:MAX_BLOCK]).decode("latin-1"),
-        }
-        if len(data) > MAX_BLOCK:
-            fields["truncated"] = True
-        self.bus.publish(start, KIND_SERIAL, self.device, fields)
+    def _to_bus(self, start: int, fields: Mapping[str, object]) -> None:
+        self.bus.publish(start, KIND_SERIAL, self.device, dict(fields))
 
 
 __all__ = [

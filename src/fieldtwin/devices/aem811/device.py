@@ -15,7 +15,7 @@ from fieldtwin.devices.aem811.plantkeys import read_plant_table
 from fieldtwin.devices.aem811.values import set_value
 from fieldtwin.devices.common import apply_faults, apply_inputs
 from fieldtwin.devices.context import BuildContext
-from fieldtwin.devices.face import Family, Input, InputValue, SignalSpec
+from fieldtwin.devices.face import Family, FrontPanel, Input, InputValue, Reading, SignalSpec
 from fieldtwin.devices.kind import DeviceKind
 from fieldtwin.devices.module import IDENTITY, ModuleDevice, insert_module, own_keys
 from fieldtwin.devices.schema import Key, Schema, Table
@@ -47,6 +47,37 @@ class Aem811Device(ModuleDevice):
 
     def _drive(self, channel: int, spec: SignalSpec, where: str, base: Path | None) -> None:
         self.aem.set_signal(channel, analog_from_spec(spec, where=where, base_dir=base))
+
+    def panel(self) -> FrontPanel:
+        """Each channel's measurement in its configured scaling, its range, its threshold
+        bits and its channel faults (AEM 4.2, 5.1), beside the status line."""
+        aem = self.aem
+        lines = aem.status()
+        readings = []
+        for ch, cfg in enumerate(aem.config.channels):
+            enabled = bool(aem.enabled >> ch & 1)
+            m = aem.measurements[ch]
+            flags = tuple(
+                name
+                for name, on in (
+                    ("ELL", m and m.below),
+                    ("continuity", m and m.continuity),
+                    ("overflow", m and m.overflow),
+                    ("EHL", m and m.above),
+                )
+                if on
+            )
+            bits = "".join(str(aem.thresholds.bits >> (ch + 8 * lv) & 1) for lv in (0, 1))
+            more: tuple[tuple[str, str | bool], ...] = (
+                ("range", cfg.range.name),
+                ("sqrt", cfg.sqrt),
+                ("threshold_bits", bits),
+            )
+            value = aem.values[ch] if enabled else None
+            text = lines.get(f"channel {ch}", "")
+            readings.append(Reading(str(ch), value, "", flags, text, more))
+        fields = tuple((k, v) for k, v in lines.items() if not k.startswith("channel "))
+        return FrontPanel(self.leds(), readings=tuple(readings), fields=fields)
 
     def configure(self, table: Table, ctx: BuildContext, where: str) -> None:
         rest = dict(table)

@@ -16,7 +16,16 @@ from pathlib import Path
 from fieldtwin.devices.common import apply_faults, apply_inputs
 from fieldtwin.devices.context import BuildContext
 from fieldtwin.devices.dem24.plantkeys import configure, console_value
-from fieldtwin.devices.face import Family, Input, InputValue, Publish, SignalSpec, Stream
+from fieldtwin.devices.face import (
+    Family,
+    FrontPanel,
+    Input,
+    InputValue,
+    Logged,
+    Publish,
+    SignalSpec,
+    Stream,
+)
 from fieldtwin.devices.kind import Build, DeviceKind
 from fieldtwin.devices.module import IDENTITY, ModuleDevice, insert_module, own_keys
 from fieldtwin.devices.schema import Key, Schema, Table
@@ -28,6 +37,7 @@ from fieldtwin.tsx.dem24.stack import Message, MessageType
 from fieldtwin.tsx.plc import Plc
 
 KIND_DEM = "dem"  # the event kind of a DEM's messages (docs/control.md, "Events")
+LOG_SHOWN = 8  # the newest stacked messages its front shows (DEM 4.2-2 layout)
 
 
 class Dem24Device(ModuleDevice):
@@ -48,6 +58,25 @@ class Dem24Device(ModuleDevice):
 
         logbook.tap = tap
         return partial(setattr, logbook, "tap", None)
+
+    def panel(self) -> FrontPanel:
+        """The module's time, its stack (fill, size, overflow, the newest messages) and
+        its logging, looked at: nothing is unstacked."""
+        dem = self.dem
+        lines = dem.status()
+        stack = dem.stack
+        fields = (
+            ("time", lines.get("time", "")),
+            ("stack", lines.get("stack", "")),
+            ("fill", len(stack)),
+            ("size", stack.size),
+            ("overflow", stack.total_lost > 0 or stack.lost > 0),
+            ("lost", stack.total_lost),
+            ("logging", lines.get("logging", "")),
+            ("sync_fault", lines.get("sync fault", "")),
+        )
+        log = tuple(logged(m) for m in reversed(stack.peek()[-LOG_SHOWN:]))
+        return FrontPanel(self.leds(), fields=fields, log=log)
 
     def inputs(self) -> Mapping[str, Input]:
         return {
@@ -128,6 +157,19 @@ KINDS = tuple(
     DeviceKind(cls.type_name, Family.MODULE, SCHEMA, _builder(cls), cls)
     for cls in (Dem2412, Dem2413)
 )
+
+
+def message_text(message: Message) -> str:
+    """``input 3 -> 1``, ``overall inputs H'00A0F1'``: the message as people read it."""
+    if message.type is MessageType.CHANGE:
+        return f"input {message.channel} -> {message.state}"
+    states = message.body[4] | ((message.body[5] & 0xFF) << 16)
+    return f"overall inputs H'{states:06X}'"
+
+
+def logged(message: Message) -> Logged:
+    kind = "change" if message.type is MessageType.CHANGE else "overall"
+    return Logged(str(message.stamp), kind, message_text(message), ("H",) if message.h else ())
 
 
 def message_data(message: Message, stored: bool, flagged: bool, fill: int) -> dict[str, object]:

@@ -9,11 +9,26 @@ the runtime's binder afterwards.  Every SCM-specific call of the face is here.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 from functools import partial
 
+from fieldtwin.devices.chars import KIND_SERIAL, CharBlocks
 from fieldtwin.devices.context import BuildContext
-from fieldtwin.devices.face import Family, Input, InputValue, Port, PortState
+from fieldtwin.devices.face import (
+    OWN_LINE,
+    Family,
+    FrontPanel,
+    Input,
+    InputValue,
+    Opened,
+    Port,
+    PortKind,
+    PortState,
+    Publish,
+    Reading,
+    Stream,
+    watching,
+)
 from fieldtwin.devices.kind import Build, DeviceKind
 from fieldtwin.devices.module import IDENTITY, ModuleDevice, insert_module, own_keys
 from fieldtwin.devices.schema import Key, Schema, Table
@@ -22,9 +37,11 @@ from fieldtwin.errors import ConfigError
 from fieldtwin.tsx.plc import Plc
 from fieldtwin.tsx.scm import MODULE_TYPES
 from fieldtwin.tsx.scm.adaptors import INPUTS
+from fieldtwin.tsx.scm.endpoints import MemoryPeer
 from fieldtwin.tsx.scm.module import ScmModule
 
-GROUP = "scm"  # a channel's own line: raw characters
+GROUP = OWN_LINE  # a channel's own line: raw characters, opened by the channel
+SCM_CHANNEL = PortKind("SCM channel")  # raw characters: no Modbus line fault applies
 
 
 class ScmDevice(ModuleDevice):
@@ -58,6 +75,43 @@ class ScmDevice(ModuleDevice):
             raise ConfigError(f"{name}: {value!r} not allowed (allowed 0 or 1)")
         self.scm.set_signal(channel, name, level)
 
+    def panel(self) -> FrontPanel:
+        """Its activity and each channel's line as the status shows them."""
+        lines = self.scm.status()
+        channels = tuple(
+            Reading(str(ch), None, text=lines.get(f"channel {ch}", "")) for ch in (0, 1)
+        )
+        return FrontPanel(
+            self.leds(), readings=channels, fields=(("activity", lines.get("activity", "")),)
+        )
+
+    def streams(self) -> Sequence[Stream]:
+        """The characters of every wired channel, in and out, in blocks (docs/trace.md)."""
+        return (Stream(KIND_SERIAL, "characters in and out of each wired channel", self._watch),)
+
+    def _watch(self, publish: Publish) -> Callable[[], None]:
+        """Every channel wired now (memory ones were wired when the module was built)."""
+        scm = self.scm
+        taps = []
+        for channel, wired in enumerate(scm.ports):
+            if wired is None:
+                continue
+            line = wired.url.split("?")[0]
+            tap = CharBlocks(scm.ctx.clock, channel, line, publish, watching(publish))
+            wired.tap = tap
+            if isinstance(wired.peer, MemoryPeer):
+                wired.peer.tap = tap
+            taps.append((wired, tap))
+
+        def stop() -> None:
+            for wired, tap in taps:
+                if wired.tap is tap:
+                    wired.tap = None
+                if isinstance(wired.peer, MemoryPeer) and wired.peer.tap is tap:
+                    wired.peer.tap = None
+
+        return stop
+
     def mode(self) -> str | None:
         return None  # SCM 1.2: no Run/Stop mode of its own
 
@@ -69,19 +123,24 @@ class ScmDevice(ModuleDevice):
         return states
 
     def ports(self) -> list[Port]:
-        return [Port(f"channel {ch}", url, GROUP) for ch, url, _ in self.wiring]
+        return [
+            Port(
+                f"channel {ch}",
+                url,
+                GROUP,
+                SCM_CHANNEL,
+                opener=partial(self._open, ch, url, where),
+            )
+            for ch, url, where in self.wiring
+        ]
 
-    def bind(self, port: Port, runner: object) -> list[str]:
-        for ch, url, where in self.wiring:
-            if port.name == f"channel {ch}":
-                try:
-                    self.scm.attach(
-                        ch, url
-                    )  # ADAPT(SCM): the PLC's host opens it (fieldtwin.facade.host)
-                except ConfigError as exc:
-                    raise ConfigError(f"{where}: {exc}") from None
-                return [line for line in self.scm.endpoint_lines() if f"channel {ch} " in line]
-        return super().bind(port, runner)
+    def _open(self, ch: int, url: str, where: str) -> Opened:
+        try:
+            self.scm.attach(ch, url)  # ADAPT(SCM): the PLC's host opens it (fieldtwin.facade.host)
+        except ConfigError as exc:
+            raise ConfigError(f"{where}: {exc}") from None
+        lines = tuple(line for line in self.scm.endpoint_lines() if f"channel {ch} " in line)
+        return Opened(lines, partial(self.scm.detach, ch))
 
     def configure(self, table: Table, ctx: BuildContext, where: str) -> None:
         configure_module(self.scm, table, where, self.wiring)

@@ -14,24 +14,31 @@ Every TES-specific call of the face is in this file.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from functools import partial
 from pathlib import Path
 
+from fieldtwin.charformat import CharFormat, line_settings
 from fieldtwin.devices.common import apply_faults, apply_inputs
 from fieldtwin.devices.context import BuildContext
 from fieldtwin.devices.face import (
+    SHARED_MODBUS,
+    BitRow,
     DeviceStatus,
     Family,
     Fault,
     FaultParam,
+    FrontPanel,
     Input,
     InputValue,
+    ModbusSlave,
     Output,
     OutputValue,
+    PanelWord,
     Port,
     PortKind,
     PortState,
+    Reading,
     SignalSpec,
     Stream,
     TesAddress,
@@ -51,9 +58,10 @@ from fieldtwin.tes.faults import fault_catalogue
 from fieldtwin.tes.memmap import register_names, register_table
 from fieldtwin.tes.model import Tes
 from fieldtwin.tes.models import MODELS
+from fieldtwin.tes.state import link_key
 from fieldtwin.words import format_hex, parse_word
 
-GROUP = "modbus"  # TES on one endpoint share one line
+GROUP = SHARED_MODBUS  # TES on one endpoint share one line
 
 # The kinds of port a TES is reached through (by the endpoint's scheme) and the line
 # faults that mean something there: a CRC or a broken character exists only where RTU
@@ -123,6 +131,31 @@ class TesRegisters:
         self._tes.write(self.address(name), value)
 
 
+def tes_line_format(tes: Tes, link: Link) -> CharFormat:
+    """§3.1.3: speed and parity are parameters; 8 data bits and 1 stop bit are fixed."""
+    key = link_key(link)
+    baud, parity = tes.params[f"{key}.baud"], tes.params[f"{key}.parity"]
+    assert isinstance(baud, int) and isinstance(parity, str)
+    return line_settings(baud=baud, data_bits=8, parity=parity, stop_bits=1)
+
+
+def modbus_slave(
+    tes: Tes, link: Link, drop: Callable[[Callable[[], int] | None], None] | None = None
+) -> ModbusSlave:
+    """What the runtime serves of ``tes`` on the port ``link`` names (docs/tes.md)."""
+    key = link_key(link)
+    return ModbusSlave(
+        tes,
+        link,
+        tes.name,
+        tes_line_format(tes, link),
+        f"{key}.baud / {key}.parity; change them with `fieldtwin tesis`",
+        "the TES",
+        tes.wire_timing,
+        drop,
+    )
+
+
 class TesDevice:
     """A TES on its endpoint, with the table it came from (for the line checks)."""
 
@@ -132,6 +165,7 @@ class TesDevice:
         self.link = link
         self.table = table
         self.where = where
+        self._dropping: list[Callable[[], int]] = []  # what this face gave the TES to drop
 
     @property
     def kind(self) -> str:
@@ -289,7 +323,68 @@ class TesDevice:
         return TesRegisters(self.tes)
 
     def ports(self) -> list[Port]:
-        return [Port(self.link.value, self.endpoint, GROUP, port_kind(self.endpoint))]
+        tes, link = self.tes, self.link
+        slave = modbus_slave(tes, link, self._droppers)
+        return [Port(link.value, self.endpoint, GROUP, port_kind(self.endpoint), slave)]
+
+    def _droppers(self, drop: Callable[[], int] | None) -> None:
+        """The endpoint's connection dropper while it serves this TES (drop_connections)."""
+        droppers = self.tes.line_faults.droppers
+        if drop is not None:
+            droppers.append(drop)
+            self._dropping.append(drop)
+            return
+        for old in self._dropping:
+            if old in droppers:
+                droppers.remove(old)
+        self._dropping.clear()
+
+    def panel(self) -> FrontPanel:
+        """Its LEDs, inputs and outputs, edge counters, analog inputs in volts or
+        milliamps with the converter's points (§4.2.4), and the watchdog word (tenths of
+        a second, §6.3), all peeked: a memorized input stays memorized."""
+        tes = self.tes
+        leds = tuple(tes.leds.items())
+        if not tes.powered:
+            return FrontPanel(leds, fields=(("status", ""),))
+        model = tes.model
+        names = {reg.name: reg.address for reg in register_names(model).values()}
+
+        def peek(name: str) -> int:
+            return tes.peek(names[name]) if name in names else 0
+
+        if "direct_io" in names:  # an analog model: bits 0..3 inputs, 8..B outputs (§6.4)
+            direct = peek("direct_io") & 0xF
+        else:
+            direct = peek("direct[0]") | (peek("direct[1]") << 16)
+        bits = (
+            BitRow("in", tuple(bool(direct >> i & 1) for i in range(model.digital_inputs))),
+            BitRow("out", tuple(tes.digital_output(i) for i in range(model.digital_outputs))),
+        )
+        counters = []
+        for i in range(model.digital_inputs):
+            rise, fall = f"counter_rise[{i}]", f"counter_fall[{i}]"
+            if f"{rise}.high" in names:
+                rises = (peek(f"{rise}.high") << 16) | peek(f"{rise}.low")
+                falls = (peek(f"{fall}.high") << 16) | peek(f"{fall}.low")
+                counters.append(Reading(str(i), rises, "rises", more=(("fall", falls),)))
+        unit = model.analog_range.unit
+        analog = []
+        for k in model.analog_inputs:
+            word = peek(f"analog_input[{k}]")
+            points = word - 0x10000 if word & 0x8000 else word
+            more = (("points", points), ("full_scale", model.analog_range.full_scale))
+            level = round(tes.ai.level(k, tes.clock.now), 4)
+            analog.append(Reading(f"a{k}", level, unit, more=more))
+        watchdog = peek("watchdog")
+        return FrontPanel(
+            leds,
+            bits=bits,
+            words=(PanelWord("watchdog", watchdog),),
+            readings=tuple(analog),
+            frozen=tuple(counters),
+            fields=(("status", format_hex(tes.status_word())), ("watchdog_s", watchdog / 10)),
+        )
 
     def label(self) -> str:
         """``TES 1 TES 32EST``: the slave number, then the model (endpoint in status lines)."""
