@@ -12,6 +12,7 @@ from functools import partial
 from pathlib import Path
 
 from fieldtwin.devices.aem811.plantkeys import read_plant_table
+from fieldtwin.devices.aem811.status import details
 from fieldtwin.devices.aem811.values import set_value
 from fieldtwin.devices.common import apply_faults, apply_inputs
 from fieldtwin.devices.context import BuildContext
@@ -47,6 +48,9 @@ class Aem811Device(ModuleDevice):
 
     def _drive(self, channel: int, spec: SignalSpec, where: str, base: Path | None) -> None:
         self.aem.set_signal(channel, analog_from_spec(spec, where=where, base_dir=base))
+
+    def details(self) -> dict[str, str]:
+        return details(self.aem)
 
     def configure(self, table: Table, ctx: BuildContext, where: str) -> None:
         rest = dict(table)

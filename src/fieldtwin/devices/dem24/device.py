@@ -16,6 +16,7 @@ from pathlib import Path
 from fieldtwin.devices.common import apply_faults, apply_inputs
 from fieldtwin.devices.context import BuildContext
 from fieldtwin.devices.dem24.plantkeys import configure, console_value
+from fieldtwin.devices.dem24.status import details
 from fieldtwin.devices.face import Family, Input, InputValue, Publish, SignalSpec, Stream
 from fieldtwin.devices.kind import Build, DeviceKind
 from fieldtwin.devices.module import IDENTITY, ModuleDevice, insert_module, own_keys
@@ -65,6 +66,9 @@ class Dem24Device(ModuleDevice):
 
     def _drive(self, channel: int, spec: SignalSpec, where: str, base: Path | None) -> None:
         self.dem.set_signal(channel, signal_from_spec(spec, where=where, base_dir=base))
+
+    def details(self) -> dict[str, str]:
+        return details(self.dem)
 
     def configure(self, table: Table, ctx: BuildContext, where: str) -> None:
         rest = dict(table)
