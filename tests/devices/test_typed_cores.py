@@ -94,3 +94,21 @@ def test_tes_typed_calls_are_the_faults_in_force() -> None:
     closed: list[int] = []
     tes.line_faults.droppers.append(lambda: closed.append(1) or 2)
     assert tes.drop_connections() == 2 and closed == [1]
+
+
+def test_object_entries_are_typed() -> None:
+    from fieldtwin.devices.face import ObjectEntry
+    from fieldtwin.devices.module import ModuleDevice
+    from fieldtwin.devices.tes import TesDevice
+    from fieldtwin.modbus.model import Link
+
+    plc, mod = _plc_with("TSX AEM 811", slot=5)
+    assert isinstance(mod, Aem811)
+    entries = ModuleDevice(mod, plc).objects().names()
+    assert entries[0] == ObjectEntry("IW5,0") and entries[0].text == "IW5,0"
+    assert entries[-1].address == "I5,S" and entries[-1].name == ""
+    tes = TesDevice(Tes("TES 8EA", slave=1), "tcp://127.0.0.1:5020", Link.RS485, {}, "tes[0]")
+    by_name = {e.name: e for e in tes.objects().names()}
+    entry = by_name["analog_input[0]"]
+    assert entry.address == "H'003'" and entry.text == "H'003' analog_input[0]"
+    assert tes.objects().peek(entry.address) == tes.objects().peek(entry.name)

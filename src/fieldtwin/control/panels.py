@@ -193,8 +193,7 @@ def _names(device: Device) -> dict[str, str]:
     """A TES word's map name -> its address (``direct[0]`` -> ``H'005'``)."""
     found = {}
     for entry in device.objects().names():
-        address, _, name = entry.partition(" ")
-        found[name] = address
+        found[entry.name] = entry.address
     return found
 
 

@@ -231,10 +231,29 @@ class Stream:
     subscribe: Callable[[Publish], Callable[[], None]]
 
 
+@dataclass(frozen=True, slots=True)
+class ObjectEntry:
+    """One object a master reads or writes: where it is and, if it has one, its name.
+
+    ``address`` is what ``read`` / ``peek`` / ``write`` take (``IW5,3``, ``H'005'``);
+    ``name`` the device's name for it (a TES's ``analog_input[0]``; ``""`` for a PL7
+    object, whose address is its name)."""
+
+    address: str
+    name: str = ""
+
+    @property
+    def text(self) -> str:
+        """``H'005' analog_input[0]``, ``IW5,3``: as the API and the console list it."""
+        return f"{self.address} {self.name}" if self.name else self.address
+
+
 class Objects(Protocol):
     """What a master reads and writes: PL7 objects of a module, registers of a TES."""
 
-    def names(self) -> list[str]: ...
+    def names(self) -> list[ObjectEntry]:
+        """Every object, in the device's order."""
+        ...
 
     def read(self, name: str) -> int:
         """A master's read, with its side effects (a TES's memorized inputs...)."""

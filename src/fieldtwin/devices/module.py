@@ -24,6 +24,7 @@ from fieldtwin.devices.face import (
     Input,
     InputValue,
     ModuleAddress,
+    ObjectEntry,
     Output,
     Port,
     PortState,
@@ -66,10 +67,10 @@ class PlcObjects:
         self._plc = plc
         self._address = address
 
-    def names(self) -> list[str]:
+    def names(self) -> list[ObjectEntry]:
         a = self._address
-        words = [f"{kind}{a},{i}" for kind in ("IW", "OW") for i in range(8)]
-        return [*words, f"I{a},S"]
+        words = [ObjectEntry(f"{kind}{a},{i}") for kind in ("IW", "OW") for i in range(8)]
+        return [*words, ObjectEntry(f"I{a},S")]
 
     def read(self, name: str) -> int:
         self._own(name)

@@ -27,6 +27,7 @@ from fieldtwin.devices.face import (
     FaultParam,
     Input,
     InputValue,
+    ObjectEntry,
     Output,
     OutputValue,
     Port,
@@ -94,9 +95,9 @@ class TesRegisters:
     def __init__(self, tes: Tes) -> None:
         self._tes = tes
 
-    def names(self) -> list[str]:
+    def names(self) -> list[ObjectEntry]:
         table = register_table(self._tes.model)
-        return [f"{format_hex(a, 3)} {r.name}" for a, r in sorted(table.items())]
+        return [ObjectEntry(format_hex(a, 3), r.name) for a, r in sorted(table.items())]
 
     def address(self, name: str) -> int:
         token = name.strip()
