@@ -112,3 +112,20 @@ def test_object_entries_are_typed() -> None:
     entry = by_name["analog_input[0]"]
     assert entry.address == "H'003'" and entry.text == "H'003' analog_input[0]"
     assert tes.objects().peek(entry.address) == tes.objects().peek(entry.name)
+
+
+def test_addresses_are_open_and_say_their_ids() -> None:
+    from fieldtwin.devices import registry
+    from fieldtwin.devices.face import Address, Family, ModuleAddress, TesAddress
+
+    module: Address = ModuleAddress(2, 3)
+    assert module.text == "23" and module.selects(" 23 ") and not module.selects("3")
+    first, second = TesAddress("tcp://a:1", 1), TesAddress("tcp://b:2", 1)
+    peers: list[Address] = [module, first, second, TesAddress("tcp://b:2", 2)]
+    assert [a.ident(peers) for a in peers] == ["23", "tes1", "tes1@2", "tes2"]
+    assert first.selects("tcp://a:1   1") and first.key == ("tes", "tcp://a:1", 1)
+    pump = Family("pump", "pump", "model", "pump model")  # a third family: a value, no edit
+    assert pump != Family.MODULE and str(Family.TES) == "tes" and Family.MODULE.key == "type"
+    assert registry.families()[:2] == [Family.MODULE, Family.TES]
+    with pytest.raises(ConfigError, match="unknown pump model 'P1' \\(allowed: none installed\\)"):
+        registry.kind_named("P1", pump)
