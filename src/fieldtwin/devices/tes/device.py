@@ -14,6 +14,7 @@ Every TES-specific call of the face is in this file.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping, Sequence
 from functools import partial
 from pathlib import Path
@@ -51,7 +52,7 @@ from fieldtwin.modbus.model import Link
 from fieldtwin.signals import analog_from_spec, discrete_from_spec
 from fieldtwin.tes.memmap import register_names, register_table
 from fieldtwin.tes.model import Tes
-from fieldtwin.tes.models import MODELS
+from fieldtwin.tes.models import MODELS, TesModel
 from fieldtwin.words import format_hex, parse_word
 
 GROUP = "modbus"  # TES on one endpoint share one line
@@ -96,8 +97,7 @@ class TesRegisters:
         self._tes = tes
 
     def names(self) -> list[ObjectEntry]:
-        table = register_table(self._tes.model)
-        return [ObjectEntry(format_hex(a, 3), r.name) for a, r in sorted(table.items())]
+        return list(_entries(self._tes.model))
 
     def address(self, name: str) -> int:
         token = name.strip()
@@ -295,6 +295,13 @@ class TesDevice:
     def label(self) -> str:
         """``TES 1 TES 32EST``: the slave number, then the model (endpoint in status lines)."""
         return f"TES {self.tes.slave} {self.kind}"
+
+
+@functools.cache
+def _entries(model: TesModel) -> tuple[ObjectEntry, ...]:
+    """The words of a model's memory map, once per model (the dashboard asks each poll)."""
+    table = register_table(model)
+    return tuple(ObjectEntry(format_hex(a, 3), r.name) for a, r in sorted(table.items()))
 
 
 SCHEMA = Schema(
