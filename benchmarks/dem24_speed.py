@@ -14,6 +14,7 @@ from __future__ import annotations
 import time
 
 from fieldtwin.clock import S
+from fieldtwin.devices.dem24.status import details
 from fieldtwin.signals import RandomEdges
 from fieldtwin.tsx.plc import Plc
 
@@ -53,7 +54,7 @@ def run(event_driven: bool) -> tuple[float, float, int]:
     print(f"  input edges time-stamped: {edges} ({edges / cpu:,.0f} per CPU second,")
     print(f"  {edges / wall:,.0f} per wall second); messages logged: {messages}")
     print(f"  clock events: {plc.clock.fired - events0}; lost messages: {mod.stack.total_lost}")
-    print(f"  oscillating channels at the end: {mod.status_details()['oscillating']}")
+    print(f"  oscillating channels at the end: {details(mod)['oscillating']}")
     return edges / cpu, edges / wall, messages
 
 

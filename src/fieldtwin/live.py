@@ -20,7 +20,7 @@ from rich.table import Table
 from rich.text import Text
 
 from fieldtwin.clock import S
-from fieldtwin.devices.face import Device, DeviceStatus, TesAddress
+from fieldtwin.devices.face import Device, DeviceStatus, ModuleAddress, TesAddress
 from fieldtwin.errors import FieldtwinError
 from fieldtwin.plant import Plant
 from fieldtwin.runtime.runner import Runner
@@ -219,7 +219,7 @@ def _module_devices(plant: Plant) -> list[Device]:
 
 def _rack_slot(device: Device) -> tuple[int, int]:
     address = device.address
-    assert not isinstance(address, TesAddress)
+    assert isinstance(address, ModuleAddress)
     return address.rack, address.slot
 
 

@@ -6,6 +6,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from fieldtwin.clock import S
+from fieldtwin.errors import ConfigError
 from fieldtwin.tsx import registry
 from fieldtwin.tsx.module import FaultCategory, IntelligentModule, ModuleContext
 from fieldtwin.tsx.textblock import Answer, Exchange
@@ -66,7 +67,10 @@ class Double(IntelligentModule):
     def inject_fault(self, name: str, active: bool) -> None:
         bits = {"terminal_block": TERMINAL_BLOCK, "sensor": SENSOR}
         if name not in bits:
-            super().inject_fault(name, active)
+            raise ConfigError(
+                f"unknown fault {name!r} for {self.type_name}"
+                f" (allowed: {', '.join(self.fault_names())})"
+            )
         self.set_fault(bits[name], active)
 
     def set_input(self, channel: int, level: bool) -> None:

@@ -9,6 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fieldtwin.errors import ConfigError, ProtocolError
+from fieldtwin.facade import inject_fault
 from fieldtwin.tsx.messages import Exchanges
 from fieldtwin.tsx.module import FaultCategory, ModuleEvent, ModuleState
 from fieldtwin.tsx.plc import Plc
@@ -64,11 +65,11 @@ def test_application_fault_latches_until_the_fault_string_is_read() -> None:
     plc, mod = make()
     plc.advance(2.1)
     plc.write("OW5,0,C", 1)
-    mod.inject_fault("sensor", True)
+    inject_fault(mod, "sensor", True)
     plc.advance(0.02)
     assert (plc.read("IW5,0,4"), plc.read("IW5,0,7")) == (1, 1)
     assert mod.leds["ERR"] == "on" and plc.read("I5,S") == 0 and mod.running  # keeps running
-    mod.inject_fault("sensor", False)
+    inject_fault(mod, "sensor", False)
     plc.advance(0.02)
     assert plc.read("IW5,0,7") == 1 and mod.leds["ERR"] == "off"  # memorised, LED live
     r = plc.exchange(m=M, c=0x47, recv_bytes=8)
@@ -80,11 +81,11 @@ def test_application_fault_latches_until_the_fault_string_is_read() -> None:
 def test_fault_read_while_present_clears_when_the_fault_ends() -> None:
     plc, mod = make()
     plc.advance(2.1)
-    mod.inject_fault("sensor", True)
+    inject_fault(mod, "sensor", True)
     plc.exchange(m=M, c=0x47, recv_bytes=8)
     plc.advance(0.02)
     assert plc.read("IW5,0,7") == 1  # still present
-    mod.inject_fault("sensor", False)
+    inject_fault(mod, "sensor", False)
     plc.advance(0.02)
     assert plc.read("IW5,0,7") == 0
 
@@ -114,12 +115,12 @@ def test_module_fault_stops_the_module_and_sets_the_fault_bit() -> None:
     plc.advance(2.1)
     plc.write("OW5,0,C", 1)
     plc.advance(0.02)
-    mod.inject_fault("terminal_block", True)
+    inject_fault(mod, "terminal_block", True)
     plc.advance(0.02)
     assert plc.read("IW5,0,C") == 0 and plc.read("I5,S") == 1
     assert plc.read("IW5,0,A") == 1 and plc.read("IW5,0,6") == 1
     assert mod.leds["OK"] == "off"
-    mod.inject_fault("terminal_block", False)
+    inject_fault(mod, "terminal_block", False)
     plc.advance(0.02)
     assert plc.read("IW5,0,C") == 1 and plc.read("I5,S") == 0 and plc.read("IW5,0,A") == 0
     assert plc.read("IW5,0,6") == 1  # memorised until the fault string is read
@@ -241,7 +242,7 @@ def test_state_machine_rejects_an_impossible_event() -> None:
 def test_inject_unknown_fault_names_the_allowed_ones() -> None:
     plc, mod = make()
     with pytest.raises(ConfigError, match="allowed: terminal_block, sensor"):
-        mod.inject_fault("smoke", True)
+        inject_fault(mod, "smoke", True)
 
 
 def test_blocking_fault_during_the_self_test_ends_it_blocked() -> None:

@@ -55,7 +55,7 @@ class Observer:
         objects = device.objects()
         names = self._names.get(id(device))
         if names is None:  # a TES lists "H'003' name": the address is enough
-            names = [entry.split()[0] for entry in objects.names()[:MAX_OBJECTS]]
+            names = [entry.address for entry in objects.names()[:MAX_OBJECTS]]
             self._names[id(device)] = names
         for name in names:
             try:

@@ -160,6 +160,14 @@ def panel_json(panel: FrontPanel) -> Json:
     }
 
 
+def _names(device: Device) -> dict[str, str]:
+    """A TES word's map name -> its address (``direct[0]`` -> ``H'005'``)."""
+    found = {}
+    for entry in device.objects().names():
+        found[entry.name] = entry.address
+    return found
+
+
 def tes_panel(device: Device, ident: str, now: int) -> Json:
     """One TES's front: LEDs, every input and output, counters, analog, watchdog."""
     status = device.status()

@@ -216,7 +216,7 @@ class Control:
     # --- objects ---------------------------------------------------------------------
 
     def objects(self, ident: str) -> list[str]:
-        return self.device(ident).objects().names()
+        return [entry.text for entry in self.device(ident).objects().names()]
 
     def read_object(self, ident: str, name: str, peek: bool) -> Json:
         objects = self.device(ident).objects()

@@ -13,11 +13,10 @@ its channel number (``"0"``), a TES analog input by ``a`` + its number
 
 from __future__ import annotations
 
-import enum
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Protocol
+from typing import ClassVar, Protocol
 
 from fieldtwin.charformat import CharFormat
 from fieldtwin.errors import ConfigError
@@ -28,9 +27,49 @@ SignalSpec = Mapping[str, object]  # a plant-file signal table: { kind = "sine",
 LedState = str  # "on", "off" or "blink"
 
 
-class Family(enum.Enum):
-    MODULE = "module"  # a TSX intelligent module in a rack slot
-    TES = "tes"  # a Leroy TES remote I/O terminal on a Modbus endpoint
+@dataclass(frozen=True, slots=True)
+class Family:
+    """A family of devices: how a plant file lists them and how users name a kind.
+
+    An open set: ``Family.MODULE`` and ``Family.TES`` are fieldtwin's; a third family
+    is one more value made in its own package (``Family("pump", "pump", "model",
+    "pump model")``) and registered with its kinds.  ``value`` is the name the API
+    shows (``"module"``, ``"tes"``); ``table`` the plant file's ``[[table]]``; ``key``
+    the key naming the kind in it (``type``, ``model``); ``what`` the kind in errors."""
+
+    value: str
+    table: str
+    key: str
+    what: str
+
+    MODULE: ClassVar[Family]  # a TSX intelligent module in a rack slot
+    TES: ClassVar[Family]  # a Leroy TES remote I/O terminal on a Modbus endpoint
+
+    def __str__(self) -> str:
+        return self.value
+
+
+Family.MODULE = Family("module", "module", "type", "module type")
+Family.TES = Family("tes", "tes", "model", "TES model")
+
+
+class Address(Protocol):
+    """Where a device is, as every window names it; each family's address implements it.
+
+    ``text`` is how the console writes it (``5``, ``23``, ``tcp://127.0.0.1:5020 1``);
+    ``key`` orders and identifies it; ``selects(token)`` says whether a user's token
+    names it; ``ident(peers)`` is its id in the control API among the addresses of
+    every device of the plant (``5``, ``tes1``, ``tes1@2``)."""
+
+    @property
+    def text(self) -> str: ...
+
+    @property
+    def key(self) -> tuple[object, ...]: ...
+
+    def selects(self, token: str) -> bool: ...
+
+    def ident(self, peers: Sequence[Address]) -> str: ...
 
 
 @dataclass(frozen=True, slots=True)
@@ -42,6 +81,20 @@ class ModuleAddress:
 
     def __str__(self) -> str:
         return f"{self.slot}" if self.rack == 0 else f"{self.rack}{self.slot}"
+
+    @property
+    def text(self) -> str:
+        return str(self)
+
+    @property
+    def key(self) -> tuple[object, ...]:
+        return ("module", self.rack, self.slot)
+
+    def selects(self, token: str) -> bool:
+        return token.strip() == str(self)
+
+    def ident(self, peers: Sequence[Address]) -> str:
+        return str(self)
 
 
 @dataclass(frozen=True, slots=True)
@@ -55,8 +108,30 @@ class TesAddress:
     def __str__(self) -> str:
         return f"{self.endpoint} {self.slave}"
 
+    @property
+    def text(self) -> str:
+        return str(self)
 
-Address = ModuleAddress | TesAddress
+    @property
+    def key(self) -> tuple[object, ...]:
+        return ("tes", self.endpoint, self.slave)
+
+    def selects(self, token: str) -> bool:
+        return " ".join(token.split()) == str(self)
+
+    def ident(self, peers: Sequence[Address]) -> str:
+        """``tes1``; ``tes1@2`` when slave 1 answers on several endpoints (the second
+        endpoint in file order)."""
+        endpoints: list[str] = []
+        for other in peers:
+            if (
+                isinstance(other, TesAddress)
+                and other.slave == self.slave
+                and other.endpoint not in endpoints
+            ):
+                endpoints.append(other.endpoint)
+        index = endpoints.index(self.endpoint)
+        return f"tes{self.slave}" if index == 0 else f"tes{self.slave}@{index + 1}"
 
 
 @dataclass(frozen=True, slots=True)
@@ -233,10 +308,29 @@ class Stream:
     subscribe: Callable[[Publish], Callable[[], None]]
 
 
+@dataclass(frozen=True, slots=True)
+class ObjectEntry:
+    """One object a master reads or writes: where it is and, if it has one, its name.
+
+    ``address`` is what ``read`` / ``peek`` / ``write`` take (``IW5,3``, ``H'005'``);
+    ``name`` the device's name for it (a TES's ``analog_input[0]``; ``""`` for a PL7
+    object, whose address is its name)."""
+
+    address: str
+    name: str = ""
+
+    @property
+    def text(self) -> str:
+        """``H'005' analog_input[0]``, ``IW5,3``: as the API and the console list it."""
+        return f"{self.address} {self.name}" if self.name else self.address
+
+
 class Objects(Protocol):
     """What a master reads and writes: PL7 objects of a module, registers of a TES."""
 
-    def names(self) -> list[str]: ...
+    def names(self) -> list[ObjectEntry]:
+        """Every object, in the device's order."""
+        ...
 
     def read(self, name: str) -> int:
         """A master's read, with its side effects (a TES's memorized inputs...)."""
@@ -404,17 +498,8 @@ def read_outputs(outputs: Mapping[str, Output]) -> tuple[OutputValue, ...]:
 def device_id(device: Device, devices: Sequence[Device]) -> str:
     """A device's id in the control API and the test helpers: ``5`` / ``23`` for a
     module; ``tes1`` for a TES (``tes1@2`` when slave 1 answers on several
-    endpoints: the second endpoint in file order)."""
-    address = device.address
-    if not isinstance(address, TesAddress):
-        return str(address)
-    endpoints: list[str] = []
-    for other in devices:
-        a = other.address
-        if isinstance(a, TesAddress) and a.slave == address.slave and a.endpoint not in endpoints:
-            endpoints.append(a.endpoint)
-    index = endpoints.index(address.endpoint)
-    return f"tes{address.slave}" if index == 0 else f"tes{address.slave}@{index + 1}"
+    endpoints: the second endpoint in file order).  Each address says its own."""
+    return device.address.ident([d.address for d in devices])
 
 
 # --- the front panel ---------------------------------------------------------------

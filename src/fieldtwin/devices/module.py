@@ -3,7 +3,8 @@
 A module adapter wraps the module core the PLC built; everything kind-specific
 (its inputs, its plant keys, its ports) is in that kind's own adapter file.
 ``ModuleDevice`` alone is the face of a module class that only the PLC's type
-table knows: its faults are the core's own ``fault_names`` / ``inject_fault``,
+table knows: its faults are its kind's table (``devices.faults``) or the core's own
+``fault_names`` / ``inject_fault`` (``NamedFaults``),
 its inputs the core's typed ``set_input(channel, level)`` if it has one
 (``PointInputs``), and it takes no plant key but ``faults``.
 """
@@ -24,6 +25,7 @@ from fieldtwin.devices.face import (
     Input,
     InputValue,
     ModuleAddress,
+    ObjectEntry,
     Output,
     Port,
     PortState,
@@ -33,6 +35,7 @@ from fieldtwin.devices.face import (
     pick_input,
     read_outputs,
 )
+from fieldtwin.devices.faults import FaultTable, table_for
 from fieldtwin.devices.schema import Key, Schema, Table, integer, optional_integer, string
 from fieldtwin.errors import ConfigError
 from fieldtwin.tsx.addressing import format_object, parse_object
@@ -65,10 +68,10 @@ class PlcObjects:
         self._plc = plc
         self._address = address
 
-    def names(self) -> list[str]:
+    def names(self) -> list[ObjectEntry]:
         a = self._address
-        words = [f"{kind}{a},{i}" for kind in ("IW", "OW") for i in range(8)]
-        return [*words, f"I{a},S"]
+        words = [ObjectEntry(f"{kind}{a},{i}") for kind in ("IW", "OW") for i in range(8)]
+        return [*words, ObjectEntry(f"I{a},S")]
 
     def read(self, name: str) -> int:
         self._own(name)
@@ -124,7 +127,7 @@ class ModuleDevice:
             mode=self.mode(),
             leds=self.leds(),
             ports=tuple(self.port_states()),
-            details=tuple(m.status().items()),
+            details=tuple({**m.status(), **self.details()}.items()),
             active_faults=active_faults(self.faults()),
             outputs=read_outputs(self.outputs()),
         )
@@ -137,6 +140,10 @@ class ModuleDevice:
         if m.state is not ModuleState.OPERATIONAL:
             return None
         return "Run" if m.running else "Stop"
+
+    def details(self) -> dict[str, str]:
+        """The kind's own status lines, after the module's (none for a generic module)."""
+        return {}
 
     def leds(self) -> tuple[tuple[str, str], ...]:
         """The module's front-panel LEDs: (name, "on" | "off" | "blink")."""
@@ -166,10 +173,14 @@ class ModuleDevice:
 
     def faults(self) -> Mapping[str, Fault]:
         m = self.module
+        table = table_for(m)
         return {
-            name: self.tracked(name, text, partial(m.inject_fault, name))
-            for name, text in m.fault_names().items()
+            name: self.tracked(name, text, partial(self._inject, table, name))
+            for name, text in table.names(m).items()
         }
+
+    def _inject(self, table: FaultTable, name: str, active: bool) -> None:
+        table.inject(self.module, name, active, {})
 
     def tracked(self, name: str, description: str, setter: Callable[[bool], None]) -> Fault:
         """A fault without parameters whose state is what this face last set."""

@@ -57,6 +57,12 @@ def _add(kind: DeviceKind) -> None:
         plc_types.register(kind.name, kind.core)
 
 
+def families() -> list[Family]:
+    """Every family with a kind registered, in registration order (fieldtwin's first)."""
+    _load()
+    return list(dict.fromkeys(f for f, _ in _kinds))
+
+
 def kinds(family: Family | None = None) -> list[DeviceKind]:
     """Every kind, in registration order."""
     _load()
@@ -75,5 +81,4 @@ def kind_named(name: str, family: Family) -> DeviceKind:
     if family is Family.MODULE and " ".join(name.upper().split()) in plc_types.module_types():
         return DeviceKind(name, Family.MODULE, GENERIC_SCHEMA, build_generic)
     allowed = ", ".join(k.name for k in kinds(family)) or "none installed"
-    what = "module type" if family is Family.MODULE else "TES model"
-    raise ConfigError(f"unknown {what} {name!r} (allowed: {allowed})")
+    raise ConfigError(f"unknown {family.what} {name!r} (allowed: {allowed})")

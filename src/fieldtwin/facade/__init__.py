@@ -6,3 +6,7 @@ runtime: :mod:`.host` paces a ``Plc`` and opens an SCM channel's pty, serial
 port or TCP listener (``scm.attach(0, "pty")``), :mod:`.tes` serves TES on their
 Modbus endpoints (``start_tes_endpoints``).  docs/architecture.md, "Façade".
 """
+
+from fieldtwin.facade.faults import fault_names, inject_fault
+
+__all__ = ["fault_names", "inject_fault"]

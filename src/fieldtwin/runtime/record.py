@@ -241,7 +241,7 @@ class Sampler:
         if found is not None:
             return found
         objects = device.objects()
-        names = [entry.split()[0] for entry in objects.names()[:MAX_OBJECTS]]
+        names = [entry.address for entry in objects.names()[:MAX_OBJECTS]]
         if isinstance(device, TesDevice):
             tes = device.tes
             found = [(name, _bind(tes.peek, parse_word(name))) for name in names]

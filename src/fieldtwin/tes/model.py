@@ -32,7 +32,14 @@ from fieldtwin.tes.digital import DigitalInputs, DiscreteSource, Wiring
 from fieldtwin.tes.eeprom import checked, mp_image
 from fieldtwin.tes.execute import SlaveAdapter
 from fieldtwin.tes.fallback import MasterWatch
-from fieldtwin.tes.faults import FaultSurface, LineFaults, Param
+from fieldtwin.tes.faults import (
+    COUNT_MAX,
+    LATE_MAX_MS,
+    NOT_READY_WINDOW_MAX_MS,
+    LineFaults,
+    Param,
+    number,
+)
 from fieldtwin.tes.inputs import (
     InputRef,
     analog_level,
@@ -100,9 +107,6 @@ class Tes:
         self.watch = MasterWatch(self.model, self.clock, ram, self.do)
         self.slave_adapter = SlaveAdapter(
             self.registers, ram, self.line_faults, self.watch.master_request
-        )
-        self.fault_surface = FaultSurface(
-            self.model, self.line_faults, link, self.di, self.set_wiring, self
         )
         # the line-wide counts of the RTU line on each port (issue 15: once per frame)
         self._tallies: dict[str, LineTally] = {}
@@ -437,17 +441,61 @@ class Tes:
 
     # --- faults --------------------------------------------------------------
 
-    def fault_names(self) -> Mapping[str, str]:
-        """name -> description of every fault this model accepts (docs/tes.md)."""
-        return self.fault_surface.names()
-
-    def inject_fault(self, name: str, on: bool, **params: Param) -> None:
-        """Set (``on``) or clear a named fault; ConfigError naming what is allowed."""
-        self.fault_surface.inject(name, on, params)
-
     def active_faults(self) -> dict[str, dict[str, Param]]:
-        """The faults in force, each with its parameters."""
-        return self.fault_surface.active()
+        """The faults in force, each with its parameters, by the names of docs/tes.md."""
+        out: dict[str, dict[str, Param]] = {}
+        if self.model.safety:
+            for i in range(self.model.digital_inputs):
+                wiring = self.di.wiring(i)
+                if wiring is not Wiring.OK:
+                    out[f"{wiring.value}_{i}"] = {}
+        if not self.powered:
+            out["power_off"] = {}
+        out.update(self.line_faults.active())
+        return out
+
+    def set_no_answer(self, on: bool) -> None:
+        """The TES hears nothing: requests are neither executed nor answered."""
+        self.line_faults.no_answer = bool(on)
+
+    def set_late_answer(self, ms: float) -> None:
+        """Every answer leaves ``ms`` (0..60 000) later than the answer delay; 0: on time."""
+        self.line_faults.late_us = round(number("ms", ms, 0, LATE_MAX_MS, " ms") * MS)
+
+    def set_corrupt_frames(
+        self, fault: state.LineFault, on: bool, count: int | None = None
+    ) -> None:
+        """Frames to this TES arrive with ``fault`` (a CRC error, a wrong character):
+        every frame until cleared (``count`` None), or the next ``count`` only."""
+        if count is not None:
+            count = int(number("count", count, 1, COUNT_MAX))
+        self.line_faults.set_corrupt(state.LineFault(fault), on, count, self.link)
+
+    def set_not_ready(
+        self, on: bool, count: int | None = None, window_ms: float | None = None
+    ) -> None:
+        """Requests in the 32-bit area get exception 4 "slave not ready": every one
+        (neither given), the next ``count``, or during ``window_ms`` of each 100 ms refresh."""
+        window = None
+        if window_ms is not None:
+            ms = number("window_ms", window_ms, 0, NOT_READY_WINDOW_MAX_MS, " ms")
+            if ms >= NOT_READY_WINDOW_MAX_MS:
+                raise ConfigError(
+                    f"fault parameter window_ms: {ms!r} not allowed (allowed 0..<100 ms)"
+                )
+            window = round(ms * MS)
+        if count is not None:
+            count = int(number("count", count, 1, COUNT_MAX))
+        self.line_faults.set_not_ready(on, count, window)
+
+    def drop_connections(self) -> int:
+        """Close every TCP connection this TES is reached through now; how many closed."""
+        if not self.line_faults.droppers:
+            raise ConfigError(
+                "fault 'drop_connections': this TES is not served on a TCP endpoint"
+                " (tcp:// or rtu+tcp://) by this run"
+            )
+        return sum(drop() for drop in list(self.line_faults.droppers))
 
     def set_wiring(self, i: int, wiring: Wiring | str) -> None:
         """TES 32ET-S: a short circuit or a broken wire on input ``i`` (§4.1.5)."""

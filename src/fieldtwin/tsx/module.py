@@ -17,7 +17,7 @@ the SimClock it is given, and the PLC drives the bus by calling
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from typing import Any, ClassVar
 
 from fieldtwin.clock import Handle as ClockHandle
@@ -283,24 +283,6 @@ class IntelligentModule:
         """A request the base does not know: answer it with ``exchange.complete``."""
         exchange.complete(Answer(v=V_ERROR), now)
 
-    def endpoint_lines(self) -> list[str]:
-        """One line per real endpoint the module is wired to (printed by `fieldtwin run`)."""
-        return []
-
-    def status_details(self) -> dict[str, str]:
-        """Module-specific lines for the console and the live view."""
-        return {}
-
-    def fault_names(self) -> Mapping[str, str]:
-        """Faults the console and plant file can inject: name -> description."""
-        return {}
-
-    def inject_fault(self, name: str, active: bool) -> None:
-        raise ConfigError(
-            f"unknown fault {name!r} for {self.type_name}"
-            f" (allowed: {', '.join(self.fault_names()) or 'none'})"
-        )
-
     # --- run / stop --------------------------------------------------------
 
     @property
@@ -484,7 +466,7 @@ class IntelligentModule:
     # --- status for people -------------------------------------------------
 
     def status(self) -> dict[str, str]:
-        """Lines for the console ``status`` command and the live view."""
+        """The lines every module shows (its kind's own lines: ``devices/<kind>/status.py``)."""
         lines = {
             "module": f"{self.type_name} rack {self.rack} slot {self.slot}",
             "state": self.state.value,
@@ -494,7 +476,6 @@ class IntelligentModule:
         }
         if not self.code_ok:
             lines["code"] = f"declared code {self.declared_code} is not this module's"
-        lines.update(self.status_details())
         return lines
 
 

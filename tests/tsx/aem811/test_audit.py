@@ -9,6 +9,7 @@ import pytest
 from fieldtwin.clock import MS
 from fieldtwin.devices.aem811.plantkeys import read_plant_table
 from fieldtwin.errors import ConfigError
+from fieldtwin.facade import inject_fault
 from fieldtwin.tsx.aem811.ranges import RANGES
 from fieldtwin.tsx.aem811.scaling import ChannelConfig, Scaling, measure
 from tests.tsx.aem811.helpers import CHN, SYS, at, configure, make, ready, run, until, words
@@ -20,7 +21,7 @@ def test_4_4_1_blocking_fault_ends_a_held_threshold_write() -> None:
     tb = plc.start_exchange(m=CHN, c=2, send=[5] * 8)  # held: module stopped
     plc.advance(0.1)
     assert not tb.done
-    mod.inject_fault("processor", True)
+    inject_fault(mod, "processor", True)
     plc.advance(0.05)
     assert tb.done and tb.result is not None
     assert (tb.result.e, tb.result.s) == (True, 4)
@@ -31,7 +32,7 @@ def test_4_4_1_request_held_by_the_self_test_ends_at_a_blocking_fault() -> None:
     plc, mod = make()
     tb = plc.start_exchange(m=SYS, c=0x0F, recv_bytes=27)  # held until the self-test ends
     plc.advance(5)
-    mod.inject_fault("processor", True)
+    inject_fault(mod, "processor", True)
     plc.advance(0.05)
     assert tb.done and tb.result is not None and (tb.result.e, tb.result.s) == (True, 4)
 
@@ -45,7 +46,7 @@ def test_2_5_4_converter_fault_freezes_values_and_threshold_bits() -> None:
     run(plc, mod)
     plc.advance(1.1)
     assert plc.read("IW5,6") == 5000 and plc.read("I5,3") == 1
-    mod.inject_fault("converter", True)
+    inject_fault(mod, "converter", True)
     plc.advance(0.05)
     for ch in range(8):
         mod.set_input(ch, volts=-5.0)
@@ -55,7 +56,7 @@ def test_2_5_4_converter_fault_freezes_values_and_threshold_bits() -> None:
     tb = plc.start_exchange(m=CHN, c=2, send=[0] * 8)
     plc.advance(1)
     assert not tb.done  # AEM 4.3-1: acknowledged at Run, after the fault
-    mod.inject_fault("converter", False)
+    inject_fault(mod, "converter", False)
     plc.advance(1.2)
     assert tb.done and plc.read("IW5,0,C") == 1
     assert plc.read("IW5,6") == 0xFFFF & -5000 and plc.read("I5,3") == 0
@@ -172,7 +173,7 @@ def test_0_20_ma_open_line_is_a_zero_current() -> None:
     plc, mod = ready(quantize=False)
     configure(plc, [0x00C0, 0x70A0, 0x00C4, 0x80A0])
     mod.set_input(0, open_circuit=True)
-    mod.inject_fault("open_4", True)
+    inject_fault(mod, "open_4", True)
     run(plc, mod)
     plc.advance(1.1)
     assert mod.values[0] == 0 and plc.read("IW5,1,8") == 0  # 0/20 mA: cannot tell

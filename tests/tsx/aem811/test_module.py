@@ -7,8 +7,10 @@ from pathlib import Path
 import pytest
 
 from fieldtwin.devices.aem811.plantkeys import read_plant_table
+from fieldtwin.devices.aem811.status import lines as status_lines
 from fieldtwin.devices.aem811.values import set_value
 from fieldtwin.errors import ConfigError
+from fieldtwin.facade import fault_names, inject_fault
 from fieldtwin.tsx.aem811.faults import describe
 from tests.tsx.aem811.helpers import CHN, SYS, at, configure, make, ready, run, until, words
 
@@ -50,7 +52,7 @@ def test_3_4_3_refused_configuration_keeps_the_previous_one() -> None:
     plc.advance(0.05)
     assert plc.read("IW5,0,B") == 1 and plc.read("IW5,0,C") == 0  # awaits, stopped
     assert mod.config.period == 30 and mod.config.channels[1].mode_word == 0x40B0
-    assert "current" in mod.status()["last refusal"]
+    assert "current" in status_lines(mod)["last refusal"]
     plc.write("OW5,0,C", 0)
     assert configure(plc, [0x00A0, 40]).v == 0xFE
     plc.write("OW5,0,C", 1)
@@ -156,7 +158,7 @@ def test_accelerated_mode_does_not_run_the_continuity_test() -> None:
     configure(plc, [0x00A0, 24, 0x00C3, 0x20A1])
     plc.write("OW5,1", 0x1F7)
     run(plc, mod)
-    mod.inject_fault("open_3", True)
+    inject_fault(mod, "open_3", True)
     plc.advance(1)
     assert plc.read("IW5,6") == 11000 and plc.read("IW5,1,B") == 0
 
@@ -168,19 +170,19 @@ def test_4_4_1_fault_2_not_reported_until_fault_1_is_gone() -> None:
     for ch in (0, 1):
         mod.set_input(ch, milliamps=12)
     plc.advance(1.1)
-    mod.inject_fault("open_0", True)  # fault 1
+    inject_fault(mod, "open_0", True)  # fault 1
     plc.advance(1.1)
     assert plc.read("IW5,0,7") == 1
     first = plc.exchange(m=SYS, c=0x47, recv_bytes=8)
     assert describe(first.data) == ["channel 0 ELL exceeded"]
-    mod.inject_fault("open_1", True)  # fault 2: no new edge on IWxy,0,7
+    inject_fault(mod, "open_1", True)  # fault 2: no new edge on IWxy,0,7
     plc.advance(1.1)
-    mod.inject_fault("open_0", False)
+    inject_fault(mod, "open_0", False)
     plc.advance(1.1)
     assert plc.read("IW5,0,7") == 1  # fault 2 memorised, still unread
     second = plc.exchange(m=SYS, c=0x47, recv_bytes=8)
     assert describe(second.data) == ["channel 1 ELL exceeded"]
-    mod.inject_fault("open_1", False)
+    inject_fault(mod, "open_1", False)
     plc.advance(1.1)
     assert plc.read("IW5,0,7") == 0 and plc.read("IW5,0,4") == 0
 
@@ -189,14 +191,14 @@ def test_4_4_1_fault_2_not_reported_until_fault_1_is_gone() -> None:
 def test_7_1_2_module_faults_stop_the_module(name: str, bit: int) -> None:
     plc, mod = ready()
     run(plc, mod)
-    mod.inject_fault(name, True)
+    inject_fault(mod, name, True)
     plc.advance(0.05)
     assert plc.read("IW5,0,C") == 0 and plc.read("I5,S") == 1 and mod.leds["OK"] == "off"
     assert plc.read("IW5,0,6") == 1 and plc.read("IW5,0,A") == int(name == "terminal_block")
     ops = sum(mod.relay_operations)
     plc.advance(2)
     assert sum(mod.relay_operations) == ops  # stopped: no acquisition
-    mod.inject_fault(name, False)
+    inject_fault(mod, name, False)
     plc.advance(0.05)
     assert plc.read("IW5,0,C") == 1 and plc.read("I5,S") == 0 and plc.read("IW5,0,A") == 0
     assert plc.read("IW5,0,6") == 1  # memorised
@@ -208,7 +210,7 @@ def test_7_1_2_module_faults_stop_the_module(name: str, bit: int) -> None:
 
 def test_7_1_1_relay_fault_found_by_the_next_self_test() -> None:
     plc, mod = ready()
-    mod.inject_fault("relay", True)
+    inject_fault(mod, "relay", True)
     plc.advance(0.05)
     assert plc.read("IW5,0,6") == 0
     plc.power_break(1.0)
@@ -219,7 +221,7 @@ def test_7_1_1_relay_fault_found_by_the_next_self_test() -> None:
 
 def test_blocking_fault() -> None:
     plc, mod = ready()
-    mod.inject_fault("processor", True)
+    inject_fault(mod, "processor", True)
     plc.advance(0.05)
     assert plc.read("IW5,0,8") == 1 and mod.leds == {"OK": "off", "ERR": "off", "F": "on"}
     r = plc.exchange(m=SYS, c=0x0F, recv_bytes=27)
@@ -257,7 +259,7 @@ def test_relay_operations_in_status() -> None:
     plc, mod = ready()
     run(plc, mod)
     plc.advance(3.05)
-    status = mod.status()
+    status = status_lines(mod)
     assert status["relay operations"].startswith(f"{sum(mod.relay_operations)} (")
     assert sum(mod.relay_operations) >= 24
     assert "channel 0" in status and status["configuration"] == "default"
@@ -279,9 +281,9 @@ def test_console_inputs_and_faults() -> None:
         mod.set_input(8, volts=1)
     with pytest.raises(ConfigError, match="exactly one"):
         mod.set_input(0, volts=1, milliamps=2)
-    assert "open_7" in mod.fault_names() and "terminal_block" in mod.fault_names()
+    assert "open_7" in fault_names(mod) and "terminal_block" in fault_names(mod)
     with pytest.raises(ConfigError, match="unknown fault"):
-        mod.inject_fault("smoke", True)
+        inject_fault(mod, "smoke", True)
 
 
 def test_signal_units() -> None:

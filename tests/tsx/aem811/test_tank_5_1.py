@@ -7,6 +7,7 @@ IW5,3..6 with IW5,2,0..3 into W0..W7 at each master-task cycle (§4.1-1).
 
 from __future__ import annotations
 
+from fieldtwin.facade import inject_fault
 from fieldtwin.signals import PiecewiseLinear
 from fieldtwin.tsx.aem811 import Aem811
 from fieldtwin.tsx.aem811.faults import describe
@@ -125,7 +126,7 @@ def test_5_1_threshold_bits_switch_with_hysteresis() -> None:
 
 def test_5_1_sensor_faults_through_the_fault_bit_string() -> None:
     plc, mod, w = set_up()
-    mod.inject_fault("open_2", True)  # level transducer line cut: under 4 mA
+    inject_fault(mod, "open_2", True)  # level transducer line cut: under 4 mA
     mod.set_input(6, open_circuit=True)  # flow transducer disconnected
     sr2(plc, w, 3.2)
     assert plc.read("IW5,1,A") == 1 and plc.read("IW5,1,E") == 1  # SR3: sensor faults
@@ -135,7 +136,7 @@ def test_5_1_sensor_faults_through_the_fault_bit_string() -> None:
     r = plc.exchange(m=SYS, c=0x47, recv_bytes=8)  # SR3: 8 -> W25
     assert r.v == 0x77
     assert describe(r.data) == ["channel 2 ELL exceeded", "channel 6 continuity"]
-    mod.inject_fault("open_2", False)
+    inject_fault(mod, "open_2", False)
     mod.set_input(6, volts=flow_volts(16000))
     sr2(plc, w, 3.2)
     assert plc.read("IW5,1") == 0 and plc.read("IW5,0,7") == 0 and mod.leds["ERR"] == "off"

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from fieldtwin.devices.dem24.status import details
 from fieldtwin.tsx.dem24 import Dem24
 from fieldtwin.tsx.plc import Plc
 from tests.tsx.dem24.helpers import ASSEMBLY, SLOT, at, read_all, stamp, synced
@@ -100,4 +101,4 @@ def test_an_n_min_above_the_changes_that_made_it_oscillating_is_normal_again_at_
     # 1, 0, then oscillating (2), then at once normal with the present level (1)
     assert [m[7] & 0xFF for m in msgs] == [1, 0, 2, 1]
     assert stamp(msgs[2])[4:] == stamp(msgs[3])[4:]  # the same millisecond
-    assert mod.status_details()["oscillating"] == "none"
+    assert details(mod)["oscillating"] == "none"

@@ -23,6 +23,7 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from fieldtwin.clock import MS, S
+from fieldtwin.devices.dem24.status import details
 from fieldtwin.errors import ConfigError
 from fieldtwin.signals import Edges, RandomEdges
 from fieldtwin.tsx.dem24 import Dem24
@@ -70,7 +71,7 @@ def _face(plc: Plc, mod: Dem24) -> tuple[object, ...]:
         mod.i_bits,
         mod.leds,
         mod.state,
-        mod.status_details(),
+        details(mod),
         mod.edges_stamped,
         stack.peek(),
         (stack.lost, stack.total_lost, stack.total_stored),

@@ -6,6 +6,7 @@ import pytest
 
 from fieldtwin.devices.dem24.plantkeys import console_value
 from fieldtwin.errors import ConfigError
+from fieldtwin.facade import inject_fault
 from tests.tsx.dem24.helpers import M_SYS, SLOT, configure, make, read_all, synced
 
 
@@ -14,7 +15,7 @@ def test_4_3_terminal_block_removed_and_back() -> None:
     mod.set_input(2, True)
     plc.advance(0.02)
     read_all(plc)
-    mod.inject_fault("terminal_block", True)
+    inject_fault(mod, "terminal_block", True)
     plc.advance(0.03)
     assert plc.read(f"IW{SLOT},0,A") == 1 and plc.read(f"IW{SLOT},0,6") == 1
     assert plc.read(f"IW{SLOT},0,4") == 1 and plc.read(f"I{SLOT},S") == 1
@@ -23,7 +24,7 @@ def test_4_3_terminal_block_removed_and_back() -> None:
     assert plc.read(f"IW{SLOT},6") == 0  # DEF = 0: inputs forced to 0
     mod.set_input(5, True)  # not read while the terminal block is out
     plc.advance(0.02)
-    mod.inject_fault("terminal_block", False)
+    inject_fault(mod, "terminal_block", False)
     plc.advance(0.03)
     assert plc.read(f"IW{SLOT},0,A") == 0 and plc.read(f"IW{SLOT},0,C") == 1
     assert plc.read(f"IW{SLOT},0,6") == 1  # memorised until the fault string is read
@@ -40,7 +41,7 @@ def test_3_2_1_def_maintain_keeps_the_inputs() -> None:
     plc, mod = synced(config=[0x0040, 0, 0, 0, 0, 0, 60, 2, 0])
     mod.set_input(2, True)
     plc.advance(0.02)
-    mod.inject_fault("terminal_block", True)
+    inject_fault(mod, "terminal_block", True)
     plc.advance(0.03)
     assert plc.read(f"IW{SLOT},6") == 1 << 2
 
@@ -50,7 +51,7 @@ def test_external_supply_without_monitoring_drops_the_inputs() -> None:
     mod.set_input(1, True)
     plc.advance(0.02)
     read_all(plc)
-    mod.inject_fault("supply", True)
+    inject_fault(mod, "supply", True)
     plc.advance(0.03)
     assert plc.read(f"IW{SLOT},2,8") == 0 and plc.read(f"IW{SLOT},0,C") == 1
     assert plc.read(f"IW{SLOT},6") == 0
@@ -62,11 +63,11 @@ def test_2_5_6_monitored_external_supply_fault() -> None:
     mod.set_input(1, True)
     plc.advance(0.02)
     read_all(plc)
-    mod.inject_fault("supply", True)
+    inject_fault(mod, "supply", True)
     plc.advance(0.03)
     assert plc.read(f"IW{SLOT},2,8") == 1 and plc.read(f"IW{SLOT},0,C") == 0
     assert plc.read(f"I{SLOT},S") == 1 and mod.leds["OK"] == "off"
-    mod.inject_fault("supply", False)
+    inject_fault(mod, "supply", False)
     plc.advance(0.03)
     assert plc.read(f"IW{SLOT},2,8") == 0 and plc.read(f"IW{SLOT},0,C") == 1
     assert [m[7] for m in read_all(plc)] == [(26 << 8) | 1, (26 << 8) | 0]

@@ -6,6 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fieldtwin.clock import MS
+from fieldtwin.facade import inject_fault
 from tests.tsx.dem24.helpers import SLOT, make
 
 steps = st.lists(
@@ -31,7 +32,7 @@ def test_the_input_image_is_the_levels_of_the_24_channels(
         elif what == "power":
             plc.power_break(0.001 * gap_ms)
         else:
-            mod.inject_fault(what, bool(channel % 2))
+            inject_fault(mod, what, bool(channel % 2))
         plc.clock.run_until(plc.clock.now + gap_ms * MS)
     plc.advance(12.0)  # any self-test over, filters settled
     levels = sum(int(mod.inputs.level(i)) << i for i in range(24))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from fieldtwin.clock import S
+from fieldtwin.facade import inject_fault
 from fieldtwin.tsx.dem24 import Dem24
 from fieldtwin.tsx.plc import Plc
 from tests.tsx.dem24.helpers import SLOT, at, read, read_all, stamp, synced
@@ -44,7 +45,7 @@ def test_4_2_2_overall_state_message_layout() -> None:
     mod.set_input(17, True)
     plc.advance(0.01)
     read_all(plc)
-    mod.inject_fault("terminal_block", True)
+    inject_fault(mod, "terminal_block", True)
     plc.write(f"OW{SLOT},1,2", 1)  # DEM 4.2-1: request logging of the overall state
     plc.advance(0.03)
     msgs = read_all(plc)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from fieldtwin.clock import S
+from fieldtwin.facade import inject_fault
 from tests.tsx.dem24.helpers import at, read_all, stamp, synced
 
 # LOG, T-SYN 60 s, DRIFT 500 ms (no drift fault at 100 ppm), PER 1 min
@@ -13,7 +14,7 @@ def test_3_2_1_per_counts_module_minutes_while_the_clock_runs_free() -> None:
     # 2.5-6: in a synchronization fault the module goes on with its internal clock;
     # 100 ppm fast, the module minute ends 6 ms early in simulated time each minute.
     plc, mod = synced(config=PER_1)  # 18:06:00.000 at t = 71 s
-    mod.inject_fault("pulses", True)
+    inject_fault(mod, "pulses", True)
     mod.set_clock_drift(100.0)
     at(plc, 250.97)  # module 18:08:59.988
     assert len(mod.stack) == 3  # 18:07, 18:08 overall; channel 24 (loss at 131.5 s)

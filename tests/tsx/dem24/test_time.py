@@ -6,6 +6,7 @@ import pytest
 
 from fieldtwin.clock import S
 from fieldtwin.errors import ConfigError
+from fieldtwin.facade import inject_fault
 from fieldtwin.tsx.plc import Plc
 from tests.tsx.dem24.helpers import (
     JULY_15_1994,
@@ -124,7 +125,7 @@ def test_25_ppm_clock_stays_within_a_2_ms_drift() -> None:
 def test_loss_of_pulses_is_a_synchronization_fault() -> None:
     plc, mod = synced()
     assert mod.pulse_source is not None
-    mod.inject_fault("pulses", True)
+    inject_fault(mod, "pulses", True)
     at(plc, 131.001)
     assert plc.read(f"I{SLOT},4") == 0  # T-SYN + DRIFT not yet over
     plc.advance(0.01)  # 71 s + 60 s + 2 ms

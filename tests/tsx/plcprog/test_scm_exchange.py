@@ -11,6 +11,7 @@ import time
 import tty
 from pathlib import Path
 
+from fieldtwin.devices.scm.status import endpoint_lines
 from fieldtwin.plant import load_plant
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -29,7 +30,7 @@ def test_the_program_sends_hello_and_keeps_what_the_peer_types() -> None:
         assert plc is not None
         plc.advance(12.0)
         assert plc.read("B0") == 1  # SR17: the channel configured (TXT1 answered H'FE')
-        path = plc.module(0, 2).endpoint_lines()[0].split()[-1]
+        path = endpoint_lines(plc.module(0, 2))[0].split()[-1]
         fd = os.open(path, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
         try:
             tty.setraw(fd)

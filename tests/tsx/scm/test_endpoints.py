@@ -9,6 +9,7 @@ from collections.abc import Iterator
 import pytest
 import serial
 
+from fieldtwin.devices.scm.status import lines as status_lines
 from fieldtwin.tsx.plc import Plc
 from tests.tsx.scm.helpers import CONFIG_3_3, CONFIG_4_6
 
@@ -37,7 +38,7 @@ def _waiting(sock: socket.socket) -> int:
 def hd() -> Iterator[tuple[Plc, object, serial.Serial]]:
     plc, mod = _plc("TSX SCM 2011", FAST)
     path = mod.attach(0, "pty")  # type: ignore[attr-defined]
-    assert path.startswith("/dev/") and path in mod.status()["channel 0"]  # type: ignore[attr-defined]
+    assert path.startswith("/dev/") and path in status_lines(mod)["channel 0"]  # type: ignore[attr-defined]
     with serial.Serial(path, 9600, timeout=0) as port:
         plc.advance(1.05)
         assert plc.exchange(m=0x0700, c=0x40, send=CONFIG_3_3).v == 0xFE

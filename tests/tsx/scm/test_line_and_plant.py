@@ -9,6 +9,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from fieldtwin.charformat import CharFormat, Parity
+from fieldtwin.devices.scm.status import lines as status_lines
 from fieldtwin.errors import ConfigError
 from fieldtwin.plant import load_plant
 from fieldtwin.tsx.scm.line import ALLOWED_FRAMES, decode_stream
@@ -50,7 +51,10 @@ def test_example_plant_wires_a_pty_and_configures_channel_0() -> None:
     plant = load_plant(EXAMPLE)
     assert plant.plc is not None
     mod = plant.plc.module(0, 7)
-    assert mod.ports[0].path.startswith("/dev/") and mod.ports[0].path in mod.status()["channel 0"]
+    assert (
+        mod.ports[0].path.startswith("/dev/")
+        and mod.ports[0].path in status_lines(mod)["channel 0"]
+    )
     assert mod.configs[0].baud == 9600 and mod.configs[1].full_duplex  # kept through self-test
     mod.detach(0)
     plant.plc.advance(1.1)  # unpaced again once the pty is gone

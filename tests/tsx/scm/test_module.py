@@ -6,7 +6,9 @@ import pytest
 
 from fieldtwin.devices.scm import ScmDevice
 from fieldtwin.devices.scm.plantkeys import signal_text
+from fieldtwin.devices.scm.status import lines as status_lines
 from fieldtwin.errors import ConfigError
+from fieldtwin.facade import inject_fault
 from fieldtwin.live import mode
 from fieldtwin.tsx.plc import Plc
 from fieldtwin.tsx.scm import MODULE_TYPES, VARIANTS
@@ -169,13 +171,13 @@ def test_6_3_identification_application_name_module_reset() -> None:
 def test_6_1_self_test_faults() -> None:
     plc = Plc()
     mod = plc.insert("TSX SCM 2011", rack=0, slot=SLOT)
-    mod.inject_fault("loopback_ch1", True)
-    mod.inject_fault("rts_cts_ch1", True)
+    inject_fault(mod, "loopback_ch1", True)
+    inject_fault(mod, "rts_cts_ch1", True)
     plc.advance(1.1)
     assert plc.read("IW7,0,6") == 1 and plc.read("I7,S") == 1 and plc.read("IW7,0,3") == 1
     bits = fault_bits(plc)
     assert bits >> 24 & 1 and bits >> 26 & 1 and not bits >> 16 & 1
-    mod.inject_fault("ram", True)
+    inject_fault(mod, "ram", True)
     plc.advance(0.02)
     assert plc.read("IW7,0,8") == 1 and plc.read("IW7,0,4") == 1 and mod.leds["F"] == "on"
 
@@ -200,13 +202,13 @@ def test_6_3_format_fault_on_21_full_duplex_and_injected() -> None:
     peer.send(b"\x00")
     plc.advance(0.03)
     assert fault_bits(plc) >> 46 & 1  # 21: 3rd word bit E, format fault in reception
-    mod.inject_fault("parity_ch1", True)
+    inject_fault(mod, "parity_ch1", True)
     peer.set_format(8, "N", 2)
     peer.send(b"x")
     plc.advance(0.03)
     assert fault_bits(plc) >> 45 & 1
     with pytest.raises(ConfigError):
-        mod.inject_fault("nonsense", True)
+        inject_fault(mod, "nonsense", True)
 
 
 def test_1_2_status_shows_no_run_stop_mode() -> None:
@@ -216,11 +218,11 @@ def test_1_2_status_shows_no_run_stop_mode() -> None:
     tb = plc.start_exchange(m=m(0), c=0x04, send=[5], recv_bytes=5)
     plc.advance(0.02)
     assert plc.read("IW7,0,C") == 1 and mod.active and not mod.running
-    status = mod.status()
+    status = status_lines(mod)
     assert "mode" not in status and status["activity"] == "executing a request"
     device = ScmDevice(mod, plc)
     assert device.status().mode is None and mode(device.status()) == "operational"
     peer.send(b"12345")
     plc.advance(0.03)
-    assert tb.done and mod.status()["activity"] == "awaiting a request"
+    assert tb.done and status_lines(mod)["activity"] == "awaiting a request"
     assert mode(device.status()) == "operational" and "Stop" not in mode(device.status())

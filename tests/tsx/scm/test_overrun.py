@@ -12,6 +12,7 @@ import os
 
 import serial
 
+from fieldtwin.devices.scm.status import lines as status_lines
 from fieldtwin.tsx.plc import Plc
 from fieldtwin.tsx.scm.line import ECHO_BACKLOG, RX_BACKLOG
 from tests.tsx.scm.helpers import CHAR_US_9600_8N2, PLAIN_HD, fault_bits, m, ready
@@ -33,7 +34,7 @@ def test_a_burst_beyond_the_backlog_is_lost_on_a_half_duplex_channel() -> None:
     assert tb.result is not None and (tb.result.v, tb.result.data) == (0, b"x" * 254)
     # SCM 6.3 (20 layout): no fault bit names an overrun; the characters are only lost
     assert fault_bits(plc) & CH0_FAULTS == 0
-    assert "99744 characters lost (overrun)" in mod.status()["channel 0"]
+    assert "99744 characters lost (overrun)" in status_lines(mod)["channel 0"]
 
 
 def test_an_overrun_on_full_duplex_raises_the_overload_fault() -> None:

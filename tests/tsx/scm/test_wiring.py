@@ -12,7 +12,9 @@ from pathlib import Path
 
 import pytest
 
+from fieldtwin.devices.scm.status import lines as status_lines
 from fieldtwin.errors import ConfigError
+from fieldtwin.facade import inject_fault
 from fieldtwin.plant import load_plant
 from fieldtwin.tsx.plc import Plc
 from tests.tsx.scm.helpers import PLAIN_HD, configure, fault_bits, m, make, ready
@@ -54,7 +56,7 @@ def test_serial_endpoint_follows_the_channel_configuration(pty_pair: tuple[int, 
     # 7E1: some pty drivers refuse a new character size on an open slave; then the status
     # says so (a real serial port takes it)
     seven_even = cflag & termios.CSIZE == termios.CS7 and cflag & termios.PARENB
-    assert seven_even or "host port refused" in mod.status()["channel 0"]
+    assert seven_even or "host port refused" in status_lines(mod)["channel 0"]
     assert not cflag & termios.PARODD and not cflag & termios.CSTOPB
     r = plc.exchange(m=0x0700, c=0x01, send_bytes=b"OK")
     assert r.v == 0 and _read_exactly(master, 2) == b"OK"
@@ -130,14 +132,14 @@ def test_injected_parity_fault_outlives_a_new_configuration() -> None:
     # the configuration that follows must not silently drop it
     plc, mod = make()
     peer = mod.attach_memory(0)
-    mod.inject_fault("parity_ch0", True)
+    inject_fault(mod, "parity_ch0", True)
     assert configure(plc, 7, 0, PLAIN_HD).v == 0xFE
     tb = plc.start_exchange(m=m(0), c=0x04, send=[1], recv_bytes=2)
     plc.advance(0.02)
     peer.send(b"x")
     plc.advance(0.02)
     assert tb.done and fault_bits(plc) >> 37 & 1
-    mod.inject_fault("parity_ch0", False)
+    inject_fault(mod, "parity_ch0", False)
     tb = plc.start_exchange(m=m(0), c=0x04, send=[1], recv_bytes=2)
     plc.advance(0.02)
     peer.send(b"y")
@@ -179,7 +181,7 @@ def test_plant_loop_key(tmp_path: Path) -> None:
     assert plc is not None
     mod = plc.module(0, 3)
     assert mod.signals[1].rx_inverted  # PSR still 0 after power-up
-    assert "loop point-to-point (receiver inverted)" in mod.status()["channel 1"]
+    assert "loop point-to-point (receiver inverted)" in status_lines(mod)["channel 1"]
     plant.write_text(
         '[[module]]\ntype = "TSX SCM 2012"\nslot = 3\nchannels = [{ channel = 0, loop = "x" }]\n'
     )

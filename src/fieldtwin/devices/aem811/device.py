@@ -12,6 +12,7 @@ from functools import partial
 from pathlib import Path
 
 from fieldtwin.devices.aem811.plantkeys import read_plant_table
+from fieldtwin.devices.aem811.status import details
 from fieldtwin.devices.aem811.values import set_value
 from fieldtwin.devices.common import apply_faults, apply_inputs
 from fieldtwin.devices.context import BuildContext
@@ -52,7 +53,7 @@ class Aem811Device(ModuleDevice):
         """Each channel's measurement in its configured scaling, its range, its threshold
         bits and its channel faults (AEM 4.2, 5.1), beside the status line."""
         aem = self.aem
-        lines = aem.status()
+        lines = {**aem.status(), **details(aem)}
         readings = []
         for ch, cfg in enumerate(aem.config.channels):
             enabled = bool(aem.enabled >> ch & 1)
@@ -78,6 +79,9 @@ class Aem811Device(ModuleDevice):
             readings.append(Reading(str(ch), value, "", flags, text, more))
         fields = tuple((k, v) for k, v in lines.items() if not k.startswith("channel "))
         return FrontPanel(self.leds(), readings=tuple(readings), fields=fields)
+
+    def details(self) -> dict[str, str]:
+        return details(self.aem)
 
     def configure(self, table: Table, ctx: BuildContext, where: str) -> None:
         rest = dict(table)

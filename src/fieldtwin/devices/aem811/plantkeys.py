@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from fieldtwin.devices.aem811.faults import FAULTS, NAMES
 from fieldtwin.errors import ConfigError
 from fieldtwin.signals.spec import analog_from_spec
 from fieldtwin.tsx.aem811.config import DEFAULT_CONFIG, PERIOD_ID, Rejection, parse_configuration
@@ -58,10 +59,10 @@ def read_plant_table(mod: Aem811, table: Mapping[str, Any], where: str, base_dir
     for index, item in enumerate(_list(table, "inputs", where)):
         _input(mod, item, f"{where}.inputs[{index}]", base_dir)
     for index, name in enumerate(_list(table, "faults", where)):
-        if name not in mod.fault_names():
-            allowed = ", ".join(mod.fault_names())
+        if name not in NAMES:
+            allowed = ", ".join(NAMES)
             raise ConfigError(f"{where}.faults[{index}]: {name!r} (allowed: {allowed})")
-        mod.inject_fault(name, True)
+        FAULTS.inject(mod, name, True, {})
     startup = Startup(_config(table, where), tuple(_thresholds(table, where, lv) for lv in (0, 1)))
     if startup.config is not None or any(t is not None for t in startup.thresholds):
         mod.schedule_startup(startup)

@@ -16,6 +16,7 @@ from pathlib import Path
 from fieldtwin.devices.common import apply_faults, apply_inputs
 from fieldtwin.devices.context import BuildContext
 from fieldtwin.devices.dem24.plantkeys import configure, console_value
+from fieldtwin.devices.dem24.status import details
 from fieldtwin.devices.face import (
     Family,
     FrontPanel,
@@ -94,6 +95,9 @@ class Dem24Device(ModuleDevice):
 
     def _drive(self, channel: int, spec: SignalSpec, where: str, base: Path | None) -> None:
         self.dem.set_signal(channel, signal_from_spec(spec, where=where, base_dir=base))
+
+    def details(self) -> dict[str, str]:
+        return details(self.dem)
 
     def configure(self, table: Table, ctx: BuildContext, where: str) -> None:
         rest = dict(table)

@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from fieldtwin.clock import seconds
+from fieldtwin.devices.dem24.faults import FAULTS
 from fieldtwin.errors import ConfigError
 from fieldtwin.signals import signal_from_spec
 from fieldtwin.tsx.dem24.civil import parse_iso
@@ -81,7 +82,7 @@ def configure(
     if not isinstance(faults, list):
         raise ConfigError(f"{where}.faults: {faults!r} is not a list of fault names")
     for name in faults:
-        mod.inject_fault(str(name), True)
+        FAULTS.inject(mod, str(name), True, {})
 
 
 def _number(value: Any, where: str) -> float:

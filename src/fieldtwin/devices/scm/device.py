@@ -33,6 +33,7 @@ from fieldtwin.devices.kind import Build, DeviceKind
 from fieldtwin.devices.module import IDENTITY, ModuleDevice, insert_module, own_keys
 from fieldtwin.devices.schema import Key, Schema, Table
 from fieldtwin.devices.scm.plantkeys import Wiring, configure_module, signal_text
+from fieldtwin.devices.scm.status import details, endpoint_lines
 from fieldtwin.errors import ConfigError
 from fieldtwin.tsx.plc import Plc
 from fieldtwin.tsx.scm import MODULE_TYPES
@@ -139,8 +140,11 @@ class ScmDevice(ModuleDevice):
             self.scm.attach(ch, url)  # ADAPT(SCM): the PLC's host opens it (fieldtwin.facade.host)
         except ConfigError as exc:
             raise ConfigError(f"{where}: {exc}") from None
-        lines = tuple(line for line in self.scm.endpoint_lines() if f"channel {ch} " in line)
+        lines = tuple(line for line in endpoint_lines(self.scm) if f"channel {ch} " in line)
         return Opened(lines, partial(self.scm.detach, ch))
+
+    def details(self) -> dict[str, str]:
+        return details(self.scm)
 
     def configure(self, table: Table, ctx: BuildContext, where: str) -> None:
         configure_module(self.scm, table, where, self.wiring)

@@ -21,6 +21,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from fieldtwin.devices.scm.faults import FAULTS
 from fieldtwin.errors import ConfigError
 from fieldtwin.tsx.scm import config as cfgmod
 from fieldtwin.tsx.scm.adaptors import Signals
@@ -49,7 +50,7 @@ def configure_module(
         module.channels = [module._channel(i, module.configs[i]) for i in (0, 1)]
     for name in _list(rest.pop("faults", []), f"{where}.faults"):
         try:
-            module.inject_fault(str(name), True)
+            FAULTS.inject(module, str(name), True, {})
         except ConfigError as exc:
             raise ConfigError(f"{where}.faults: {exc}") from None
     channels = _list(rest.pop("channels", []), f"{where}.channels")

@@ -4,7 +4,7 @@ Address: the endpoint and the slave number on it.  Inputs: ``"0"``..``"31"``
 digital (true/false, 1/0, on/off; a discrete signal), ``"a0"``..``"a7"``
 analog (volts or milliamps; an analog signal); on a TES with analog inputs
 only, ``"2"`` is ``"a2"`` (the console's older form).  Faults: the TES core's
-catalogue (``fieldtwin.tes.faults``): ``power_off`` (24 V off), the line faults
+catalogue (``fieldtwin.devices.tes.faults``): ``power_off`` (24 V off), the line faults
 ``no_answer``, ``late_answer`` (ms), ``bad_crc``, ``broken_character``,
 ``not_ready``, and on the TES 32ET-S ``short_I`` / ``open_I`` (wiring, §4.1.5).
 Objects: the words of the memory map by address or name, read as a master
@@ -14,6 +14,7 @@ Every TES-specific call of the face is in this file.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Mapping, Sequence
 from functools import partial
 from pathlib import Path
@@ -32,6 +33,7 @@ from fieldtwin.devices.face import (
     Input,
     InputValue,
     ModbusSlave,
+    ObjectEntry,
     Output,
     OutputValue,
     PanelWord,
@@ -49,15 +51,15 @@ from fieldtwin.devices.face import (
 )
 from fieldtwin.devices.kind import Build, DeviceKind
 from fieldtwin.devices.schema import Key, Schema, Table
+from fieldtwin.devices.tes.faults import FAULTS, fault_catalogue
 from fieldtwin.devices.tes.plantkeys import KEYS, build_one, check_lines, link_of
 from fieldtwin.devices.tes.values import analog_value, contact_value
 from fieldtwin.errors import ConfigError
 from fieldtwin.modbus.model import Link
 from fieldtwin.signals import analog_from_spec, discrete_from_spec
-from fieldtwin.tes.faults import fault_catalogue
 from fieldtwin.tes.memmap import register_names, register_table
 from fieldtwin.tes.model import Tes
-from fieldtwin.tes.models import MODELS
+from fieldtwin.tes.models import MODELS, TesModel
 from fieldtwin.tes.state import link_key
 from fieldtwin.words import format_hex, parse_word
 
@@ -102,9 +104,8 @@ class TesRegisters:
     def __init__(self, tes: Tes) -> None:
         self._tes = tes
 
-    def names(self) -> list[str]:
-        table = register_table(self._tes.model)
-        return [f"{format_hex(a, 3)} {r.name}" for a, r in sorted(table.items())]
+    def names(self) -> list[ObjectEntry]:
+        return list(_entries(self._tes.model))
 
     def address(self, name: str) -> int:
         token = name.strip()
@@ -283,10 +284,10 @@ class TesDevice:
         return self.tes.active_faults().get(name)
 
     def _inject(self, name: str, on: bool) -> None:
-        self.tes.inject_fault(name, on)
+        FAULTS.inject(self.tes, name, on, {})
 
     def _inject_with(self, name: str, on: bool, params: Mapping[str, FaultParam]) -> None:
-        self.tes.inject_fault(name, on, **params)
+        FAULTS.inject(self.tes, name, on, params)
 
     # --- outputs ----------------------------------------------------------------
 
@@ -389,6 +390,13 @@ class TesDevice:
     def label(self) -> str:
         """``TES 1 TES 32EST``: the slave number, then the model (endpoint in status lines)."""
         return f"TES {self.tes.slave} {self.kind}"
+
+
+@functools.cache
+def _entries(model: TesModel) -> tuple[ObjectEntry, ...]:
+    """The words of a model's memory map, once per model (the dashboard asks each poll)."""
+    table = register_table(model)
+    return tuple(ObjectEntry(format_hex(a, 3), r.name) for a, r in sorted(table.items()))
 
 
 SCHEMA = Schema(

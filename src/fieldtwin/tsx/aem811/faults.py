@@ -1,4 +1,4 @@
-"""The AEM 811 fault bit string and the faults users can inject (AEM 4.4-1, 7.1).
+"""The AEM 811 fault bit string (AEM 4.4-1, 7.1); the faults by name are in devices/aem811.
 
 Bits 0..15 are reserved (the twin uses bit 0 for a processor failure, a
 blocking fault nobody can read anyway); 16 terminal block, 17 converter, 18
@@ -18,15 +18,6 @@ CONVERTER = 17
 RELAY = 18
 CHANNEL_BASE = 32
 BELOW, CONTINUITY, OVERFLOW, ABOVE = 0, 1, 2, 3  # offsets within a channel's 4 bits
-
-MODULE_FAULTS = {"processor": PROCESSOR, "terminal_block": TERMINAL_BLOCK, "converter": CONVERTER}
-
-NAMES: dict[str, str] = {
-    "processor": "processor or bus interface failure: blocking fault, F LED (until power-up)",
-    "terminal_block": "terminal block open or not fitted (bit 16, IWxy,0,A): module stops",
-    "converter": "analog to digital converter fault (bit 17): module stops",
-    "relay": "input relay fault (bit 18): found by the next initial self-test, module stops",
-} | {f"open_{c}": f"channel {c} wire cut: the input is an open circuit" for c in range(8)}
 
 
 def channel_bits(channel: int) -> tuple[int, int, int, int]:

@@ -10,7 +10,6 @@ continuity test, thresholds with hysteresis.  AEM 3: configuration.  AEM 4.2,
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import ClassVar, Protocol
 
@@ -23,7 +22,6 @@ from fieldtwin.tsx.aem811.config import DEFAULT_CONFIG, ModuleConfig, Rejection
 from fieldtwin.tsx.aem811.inputs import UNITS, ChannelInput, electrical
 from fieldtwin.tsx.aem811.scaling import Measurement, hysteresis, measure
 from fieldtwin.tsx.aem811.sequencer import SLOT_US, Sequencer, Slot
-from fieldtwin.tsx.aem811.status import details
 from fieldtwin.tsx.aem811.thresholds import ThresholdDetector
 from fieldtwin.tsx.module import FaultCategory, IntelligentModule, ModuleContext, ModuleState
 from fieldtwin.tsx.textblock import (
@@ -313,20 +311,31 @@ class Aem811(IntelligentModule):
     def fault_category_of(self, bit: int) -> FaultCategory:
         return flt.category(bit)
 
-    def fault_names(self) -> Mapping[str, str]:
-        return flt.NAMES
+    # --- conditions put on the module (the faults of docs/aem811.md) ------------------
 
-    def inject_fault(self, name: str, active: bool) -> None:
-        if name not in flt.NAMES:
-            super().inject_fault(name, active)
-        if name.startswith("open_"):
-            self.cut[int(name[5:])] = active
-        elif name == "relay":  # AEM 7.1-1: only the initial self-test finds it
-            (self._hardware_faults.add if active else self._hardware_faults.discard)(flt.RELAY)
-            if not active:
-                self.set_fault(flt.RELAY, False)
-        else:
-            self.hardware_fault(flt.MODULE_FAULTS[name], active)
+    def set_wire_break(self, channel: int, cut: bool) -> None:
+        """Channel ``channel``'s wire cut (an open circuit at the input) or mended."""
+        self._check_channel(channel)
+        self.cut[channel] = cut
+
+    def set_terminal_block(self, fitted: bool) -> None:
+        """The terminal block fitted or open (bit 16, IWxy,0,A: module to Stop)."""
+        self.hardware_fault(flt.TERMINAL_BLOCK, not fitted)
+
+    def set_converter_fault(self, present: bool) -> None:
+        """The analog to digital converter failed (bit 17: module to Stop)."""
+        self.hardware_fault(flt.CONVERTER, present)
+
+    def set_processor_fault(self, present: bool) -> None:
+        """Processor or bus interface failure: blocking fault, F LED, until power-up."""
+        self.hardware_fault(flt.PROCESSOR, present)
+
+    def set_relay_fault(self, present: bool) -> None:
+        """An input relay failed (bit 18): only the next initial self-test finds it
+        (AEM 7.1-1); repaired, the bit is cleared at once."""
+        (self._hardware_faults.add if present else self._hardware_faults.discard)(flt.RELAY)
+        if not present:
+            self.set_fault(flt.RELAY, False)
 
     # --- power and self-test -----------------------------------------------------
 
@@ -367,6 +376,3 @@ class Aem811(IntelligentModule):
             startup.apply(self)
         else:
             self._startup = startup
-
-    def status_details(self) -> dict[str, str]:
-        return details(self)

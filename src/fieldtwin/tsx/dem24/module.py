@@ -12,7 +12,7 @@ Block requests live in :mod:`.requests`, the two models in :mod:`.models`.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from typing import Any, ClassVar
 
 from fieldtwin.clock import Handle
@@ -63,12 +63,6 @@ from fieldtwin.tsx.dem24.timebase import SyncOutcome, Timebase
 from fieldtwin.tsx.module import FaultCategory, IntelligentModule, ModuleContext, ModuleState
 from fieldtwin.tsx.textblock import Exchange
 from fieldtwin.words import get_bit
-
-FAULTS = {
-    "terminal_block": "TSX BLK4 terminal block removed",
-    "supply": "external input supply lost",
-    "pulses": "synchronization pulses no longer reach IN-SYN",
-}
 
 
 class Dem24(IntelligentModule):
@@ -285,37 +279,11 @@ class Dem24(IntelligentModule):
         self.set_fault(FB_CONFIG_REFUSED, True)
         self._refresh_words()
 
-    # --- the console and plant-file side ------------------------------------------------
-
-    def fault_names(self) -> Mapping[str, str]:
-        return FAULTS
-
-    def inject_fault(self, name: str, active: bool) -> None:
-        if name == "terminal_block":
-            self.set_terminal_block(not active)
-        elif name == "supply":
-            self.set_supply(not active)
-        elif name == "pulses" and self.pulse_source is not None:
-            self.pulse_source.silenced = active
-        elif name == "pulses":
+    def set_pulses_lost(self, lost: bool) -> None:
+        """The synchronization pulses no longer reach IN-SYN (or reach it again)."""
+        if self.pulse_source is None:
             raise ConfigError("fault 'pulses': this module has no pulse source (sync key)")
-        else:
-            super().inject_fault(name, active)
-
-    def status_details(self) -> dict[str, str]:
-        tb = self.timebase
-        now = self.clock.now
-        osc = [i for i, d in enumerate(self.detectors or []) if d.oscillating]
-        return {
-            "time": f"{tb.now(now)} ({tb.state.value})" if tb.ready else tb.state.value,
-            "sync fault": "yes" if tb.fault else "no",
-            "stack": f"{len(self.stack)}/{self.stack.size} (lost {self.stack.total_lost})",
-            "logging": "active" if self.logging else "stopped",
-            "selected": f"H'{self.selected():06X}'",
-            "inputs": f"H'{self.inputs.levels():06X}'",
-            "oscillating": ", ".join(map(str, osc)) or "none",
-            "config": "default" if self.default_config else "user",
-        }
+        self.pulse_source.silenced = lost
 
     # --- time -----------------------------------------------------------------------
 

@@ -10,7 +10,7 @@ identification, application name, fault bits.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from typing import Any, ClassVar
 
 from fieldtwin.charformat import CharFormat
@@ -175,23 +175,6 @@ class ScmModule(IntelligentModule):
         """The base lines without a Run/Stop mode the module does not have (SCM 1.2, 5.2)."""
         lines = super().status()
         lines.pop("mode", None)
-        return lines
-
-    def endpoint_lines(self) -> list[str]:
-        return self.wiring.endpoint_lines(f"{self.type_name} slot {self.address}")
-
-    def status_details(self) -> dict[str, str]:
-        lines = {"activity": "executing a request" if self.active else "awaiting a request"}
-        for index, channel in enumerate(self.channels):
-            lost = self.lines[index].overruns
-            overrun = f" | {lost} characters lost (overrun)" if lost else ""
-            wiring = self.wiring.describe(index)
-            lines[f"channel {index}"] = (
-                f"{self.adaptors[index].label} | {channel.describe()} | {wiring}"
-                f" | {self.signals[index].describe()}{overrun}"
-            )
-        if self.app_name:
-            lines["application name"] = self.app_name.decode("latin-1").rstrip()
         return lines
 
     # --- host of the channels -----------------------------------------------------
@@ -451,22 +434,18 @@ class ScmModule(IntelligentModule):
 
     # --- faults ---------------------------------------------------------------------
 
-    def fault_names(self) -> Mapping[str, str]:
-        names = {
-            name: f"self-test fault (fault bit {bit})" for name, bit in HARDWARE_FAULTS.items()
-        }
-        for ch in (0, 1):
-            names[f"parity_ch{ch}"] = f"channel {ch}: every character received with a parity error"
-            names[f"format_ch{ch}"] = f"channel {ch}: every character received with a format error"
-        return names
+    def set_self_test_fault(self, bit: int, present: bool) -> None:
+        """A fault the self-test finds (fault bit ``bit`` of HARDWARE_FAULTS, SCM 6.1, 6.3)."""
+        if bit not in HARDWARE_FAULTS.values():
+            allowed = ", ".join(map(str, HARDWARE_FAULTS.values()))
+            raise ConfigError(f"SCM self-test fault bit {bit} not allowed (allowed: {allowed})")
+        self.hardware_fault(bit, present)
+        self.changed()
 
-    def inject_fault(self, name: str, active: bool) -> None:
-        if name in HARDWARE_FAULTS:
-            self.hardware_fault(HARDWARE_FAULTS[name], active)
-            self.changed()
-            return
-        kind, _, ch = name.rpartition("_ch")
-        if kind in ("parity", "format") and ch in ("0", "1"):
-            setattr(self.lines[int(ch)], f"inject_{kind}", active)  # kept by the UART
-            return
-        super().inject_fault(name, active)
+    def set_parity_errors(self, channel: int, on: bool) -> None:
+        """Every character channel ``channel`` receives has a parity error (kept by the UART)."""
+        self.wiring.line(channel).inject_parity = on
+
+    def set_format_errors(self, channel: int, on: bool) -> None:
+        """Every character channel ``channel`` receives has a format error (kept by the UART)."""
+        self.wiring.line(channel).inject_format = on

@@ -98,14 +98,6 @@ class Wiring:
         port = self.ports[channel]
         return port.describe() if port is not None else "not wired"
 
-    def endpoint_lines(self, label: str) -> list[str]:
-        """One line per channel wired to a real endpoint, for `fieldtwin run`."""
-        return [
-            f"listening: {label} channel {index} {port.describe()}"
-            for index, port in enumerate(self.ports)
-            if port is not None and port.url != "memory"
-        ]
-
     # --- adaptor signals (SCM 5.1) ----------------------------------------------------
 
     def set_signal(self, channel: int, name: str, level: int) -> None:

@@ -1,12 +1,15 @@
-"""Lines for the console ``status`` command and the live view."""
+"""The TSX AEM 811's lines for the console's ``status`` and the live view."""
 
 from __future__ import annotations
 
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 from fieldtwin.tsx.aem811.config import ModuleConfig, Rejection
 from fieldtwin.tsx.aem811.scaling import Measurement, Scaling
 from fieldtwin.tsx.aem811.thresholds import ThresholdDetector
+
+if TYPE_CHECKING:
+    from fieldtwin.tsx.aem811.module import Aem811 as Aem811Module
 
 RELAY_LIFE = 300_000_000  # AEM 2.5-2, 8.2: 3 x 10^8 operations
 
@@ -74,3 +77,8 @@ def details(mod: Aem811) -> dict[str, str]:
         f"{total} (max per channel {max(mod.relay_operations)} of a {RELAY_LIFE:.0e} life)"
     )
     return lines
+
+
+def lines(mod: Aem811Module) -> dict[str, str]:
+    """Every status line: the module's own, then the AEM's."""
+    return {**mod.status(), **details(mod)}
