@@ -216,7 +216,9 @@ class ModuleDevice:
 
     def panel(self) -> FrontPanel:
         """The LEDs and the core's status lines (a kind's adapter shows more)."""
-        return FrontPanel(self.leds(), fields=tuple(self.module.status().items()))
+        return FrontPanel(
+            self.leds(), fields=tuple({**self.module.status(), **self.details()}.items())
+        )
 
     # --- plant file -----------------------------------------------------------
 

@@ -64,7 +64,7 @@ class Dem24Device(ModuleDevice):
         """The module's time, its stack (fill, size, overflow, the newest messages) and
         its logging, looked at: nothing is unstacked."""
         dem = self.dem
-        lines = dem.status()
+        lines = {**dem.status(), **details(dem)}
         stack = dem.stack
         fields = (
             ("time", lines.get("time", "")),

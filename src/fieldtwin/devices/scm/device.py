@@ -78,7 +78,7 @@ class ScmDevice(ModuleDevice):
 
     def panel(self) -> FrontPanel:
         """Its activity and each channel's line as the status shows them."""
-        lines = self.scm.status()
+        lines = {**self.scm.status(), **details(self.scm)}
         channels = tuple(
             Reading(str(ch), None, text=lines.get(f"channel {ch}", "")) for ch in (0, 1)
         )
