@@ -129,3 +129,22 @@ def test_addresses_are_open_and_say_their_ids() -> None:
     assert registry.families()[:2] == [Family.MODULE, Family.TES]
     with pytest.raises(ConfigError, match="unknown pump model 'P1' \\(allowed: none installed\\)"):
         registry.kind_named("P1", pump)
+
+
+def test_the_documented_fault_calls_on_a_core_still_work() -> None:
+    """`tes.inject_fault(...)`, `tes.fault_names()` and `mod.inject_fault(name, on)` (the
+    names docs/tes.md and docs/aem811.md gave) reach the same tables as the façade."""
+    from fieldtwin.tes import Tes
+    from fieldtwin.tsx.plc import Plc
+
+    tes = Tes("8EA")
+    assert "late_answer" in tes.fault_names()
+    tes.inject_fault("late_answer", True, ms=20)
+    assert tes.active_faults() == {"late_answer": {"ms": 20.0}}
+    tes.inject_fault("late_answer", False)
+    assert tes.active_faults() == {}
+    plc = Plc(model="TSX 87", scan_ms=10)
+    aem = plc.insert("TSX AEM 811", rack=0, slot=5, code=648)
+    assert "open_3" in aem.fault_names()
+    aem.inject_fault("open_3", True)
+    aem.inject_fault("open_3", False)

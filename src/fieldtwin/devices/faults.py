@@ -120,7 +120,9 @@ def table_for(core: object) -> FaultTable:
         found = _tables.get(cls)
         if found is not None:
             return found
-    if isinstance(core, NamedFaults):
+    # a core naming its faults itself; not the cores' own by-name calls, which come here
+    own = getattr(type(core), "fault_names", None)
+    if isinstance(core, NamedFaults) and not getattr(own, "through_table", False):
         return _OwnNames()
     return _NoFaults()
 

@@ -8,8 +8,12 @@ follows the wall clock) and the channel's line is opened here.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 from fieldtwin.clock import SimClock
+from fieldtwin.devices.faults import FaultParam
 from fieldtwin.errors import ConfigError
+from fieldtwin.facade import faults
 from fieldtwin.runtime.runner import Runner
 from fieldtwin.transports import listen, open_pty, open_serial, parse_endpoint
 from fieldtwin.transports.base import Transport, line_settings
@@ -21,6 +25,14 @@ from fieldtwin.tsx.scm.line import Line
 
 class OsHost:
     """Pacing by a Runner; SCM channel lines on ptys, serial devices and TCP."""
+
+    def fault_names(self, core: object) -> Mapping[str, str]:
+        """The fault names a core's kind takes (``Tes.fault_names()``, docs/tes.md)."""
+        return faults.fault_names(core)
+
+    def inject_fault(self, core: object, name: str, on: bool, **params: FaultParam) -> None:
+        """A fault by name on a core (``tes.inject_fault("no_answer", True)``)."""
+        faults.inject_fault(core, name, on, **params)
 
     def pacer(self, clock: SimClock, speed: float | None) -> Pacer:
         return Runner(clock, speed)

@@ -19,10 +19,11 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import cast
+from typing import Any, cast
 
 from fieldtwin.clock import MS, S, SimClock, seconds
 from fieldtwin.errors import ConfigError
+from fieldtwin.hosting import host
 from fieldtwin.modbus.model import Counter, LineTally, Link, Request, Result
 from fieldtwin.signals import Constant
 from fieldtwin.tes import state
@@ -438,6 +439,19 @@ class Tes:
             "Prm": "on" if self.prm_jumper and powered else "off",
             "Wdg": "blink" if self.ram.wdg_blinking and powered else "off",  # §3.1.3
         }
+
+    # --- faults by name (docs/tes.md): each kind's table, through the host ----
+
+    def fault_names(self) -> Mapping[str, str]:
+        """name -> description of every fault this core takes by name."""
+        return cast(Any, host()).fault_names(self)  # type: ignore[no-any-return]
+
+    fault_names.through_table = True  # type: ignore[attr-defined]  # (devices.faults)
+
+    def inject_fault(self, name: str, on: bool, **params: int | float) -> None:
+        """Set or clear a fault by its name: the kind's table (fieldtwin.devices) maps
+        it to this core's typed call; ConfigError naming what is allowed."""
+        cast(Any, host()).inject_fault(self, name, on, **params)
 
     # --- faults --------------------------------------------------------------
 

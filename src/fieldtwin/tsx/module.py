@@ -17,13 +17,14 @@ the SimClock it is given, and the PLC drives the bus by calling
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import Any, ClassVar
+from collections.abc import Callable, Mapping
+from typing import Any, ClassVar, cast
 
 from fieldtwin.clock import Handle as ClockHandle
 from fieldtwin.clock import S
 from fieldtwin.errors import ConfigError, ProtocolError
 from fieldtwin.fsm import Machine, Table
+from fieldtwin.hosting import host
 from fieldtwin.tsx.bus import BusImage, LedState, ModuleContext, ModuleEvent, ModuleState
 from fieldtwin.tsx.faults import FaultCategory, FaultLatches
 from fieldtwin.tsx.messages import Exchanges, OnDone
@@ -462,6 +463,19 @@ class IntelligentModule:
     def _exchanges(self) -> dict[int, Exchange]:
         """The exchanges by key (a subclass holding one under its own key uses it)."""
         return self.exchanges.by_key
+
+    # --- faults by name (docs/aem811.md): each kind's table, through the host ----
+
+    def fault_names(self) -> Mapping[str, str]:
+        """name -> description of every fault this core takes by name."""
+        return cast(Any, host()).fault_names(self)  # type: ignore[no-any-return]
+
+    fault_names.through_table = True  # type: ignore[attr-defined]  # (devices.faults)
+
+    def inject_fault(self, name: str, active: bool) -> None:
+        """Set or clear a fault by its name: the kind's table (fieldtwin.devices) maps
+        it to this core's typed call; ConfigError naming what is allowed."""
+        cast(Any, host()).inject_fault(self, name, active)
 
     # --- status for people -------------------------------------------------
 
