@@ -113,8 +113,8 @@ def _damaged(seed: list[str]) -> list[tuple[str, list[str], str]]:
         ),
         ("a float time", [head, '["ret", 1e30, 0]', *body], "line 2: time 1e+30"),
         (
-            "time going back",
-            [*seed[:-1], f'["ret", 0, {end[2]}]', seed[-1]],
+            "an output's time going back",
+            [*seed[:-1], '["result", 0, "console", null]', seed[-1]],
             "is before the previous record's",
         ),
         ("a record after the end", [*seed, seed[-1]], "record after the end record"),
@@ -417,3 +417,17 @@ def test_a_damaged_deflate_stream_is_named(tmp_path: Path, seed: list[str]) -> N
     result = _fieldtwin("replay", str(path), cwd=tmp_path)
     assert result.returncode == 2 and "Traceback" not in result.stderr, result.stderr
     assert result.stderr.startswith(f"fieldtwin: {path}: ")
+
+
+def test_an_input_stamped_before_an_output_of_its_instant_is_accepted() -> None:
+    """Bytes that arrived at 1099324 us, taken at the instant 1100000 us after its outputs
+    were written (a loaded machine's paced run): the inputs' order is their clock events."""
+    from fieldtwin.runtime.recfile import Checker, RecordingError
+
+    checker = Checker("x.ftrec")
+    checker.check(["object", 1_100_000, "5", "IW5,0", 1], 2)
+    checker.check(["data", 1_099_324, 10, "t1", "00"], 3)
+    with pytest.raises(RecordingError, match="clock events never run backwards"):
+        checker.check(["data", 1_099_400, 9, "t1", "00"], 4)
+    with pytest.raises(RecordingError, match="records are in time order"):
+        checker.check(["object", 1_000_000, "5", "IW5,0", 1], 5)
