@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib
+import re
 import tomllib
 from pathlib import Path
 
@@ -121,3 +122,62 @@ def test_the_moved_public_names_keep_working() -> None:
     old = importlib.import_module("fieldtwin.tes.plant")  # documented in docs/tes.md
     assert (old.start_tes_endpoints, old.build_tes) == (new_start, new_build)
     assert ObjectRef is KernelRef and parse_object("IW5,0").slot == 5
+
+
+WINDOWS = (
+    "fieldtwin.runtime",
+    "fieldtwin.control",
+    "fieldtwin.testing",
+    "fieldtwin.console",
+    "fieldtwin.console_prog",
+    "fieldtwin.console_syntax",
+    "fieldtwin.console_trace",
+    "fieldtwin.live",
+    "fieldtwin.plant",
+    "fieldtwin.replay",
+)
+KIND_MODULES = (
+    "fieldtwin.devices.aem811",
+    "fieldtwin.devices.dem24",
+    "fieldtwin.devices.scm",
+    "fieldtwin.devices.tes",
+    "fieldtwin.devices.discrete",
+    "fieldtwin.tes",
+    "fieldtwin.tsx.aem811",
+    "fieldtwin.tsx.dem24",
+    "fieldtwin.tsx.scm",
+    "fieldtwin.tsx.discrete",
+)
+
+
+def _window_files() -> list[Path]:
+    files: list[Path] = []
+    for window in WINDOWS:
+        path = PACKAGE / window.removeprefix("fieldtwin.")
+        files.extend(sorted(path.rglob("*.py")) if path.is_dir() else [path.with_suffix(".py")])
+    return files
+
+
+def test_the_forbidden_contract_keeps_the_windows_from_every_device_kind() -> None:
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    (forbidden,) = [
+        c for c in config["tool"]["importlinter"]["contracts"] if c["type"] == "forbidden"
+    ]
+    assert set(forbidden["source_modules"]) == set(WINDOWS)
+    assert set(forbidden["forbidden_modules"]) == set(KIND_MODULES)
+    assert not forbidden.get("ignore_imports")
+
+
+def test_no_window_source_names_a_device_kind() -> None:
+    """The same rule read in the text, lazy imports in functions included (lint-imports
+    sees them too; this runs with the tests)."""
+    kinds = "|".join(re.escape(k) for k in KIND_MODULES)
+    pattern = re.compile(rf"^\s*(?:from|import)\s+(?:{kinds})(?:[.\s]|$)", re.MULTILINE)
+    files = _window_files()
+    assert len(files) > len(WINDOWS)  # the packages' files were found
+    found = [
+        f"{path.relative_to(ROOT)}: {m.group(0).strip()}"
+        for path in files
+        for m in pattern.finditer(path.read_text())
+    ]
+    assert not found, found

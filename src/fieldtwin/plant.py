@@ -39,14 +39,13 @@ from typing import TYPE_CHECKING
 from fieldtwin.clock import SimClock
 from fieldtwin.devices import registry
 from fieldtwin.devices.context import BuildContext
-from fieldtwin.devices.face import Device, Family
+from fieldtwin.devices.face import Device, Family, TesAddress
 from fieldtwin.devices.module import ModuleDevice
 from fieldtwin.devices.schema import table_at
-from fieldtwin.devices.tes import TesDevice
 from fieldtwin.errors import ConfigError
+from fieldtwin.facade.tes import Tes, tes_core
 from fieldtwin.runtime.events import EventBus
 from fieldtwin.runtime.pace import MAX_SPEED, MIN_SPEED
-from fieldtwin.tes.model import Tes
 from fieldtwin.textfile import read_text
 from fieldtwin.tsx.plc import MAX_PROGRAM_BYTES, MODELS, WATCHDOG_MS, WATCHDOG_RANGE_MS, Plc
 from fieldtwin.tsx.plcmemory import TxtDeclaration
@@ -95,13 +94,14 @@ class Plant:
     # --- devices -----------------------------------------------------------
 
     @property
-    def tes_devices(self) -> list[TesDevice]:
-        return [d for d in self.devices if isinstance(d, TesDevice)]
+    def tes_devices(self) -> list[Device]:
+        """The TES devices, in file order."""
+        return [d for d in self.devices if d.family == Family.TES]
 
     @property
     def tes(self) -> list[Tes]:
         """The TES cores, in file order (Python users and tests reach them so)."""
-        return [d.tes for d in self.tes_devices]
+        return [t for t in map(tes_core, self.tes_devices) if t is not None]
 
     def module_device(self, rack: int, slot: int) -> ModuleDevice:
         """The module in rack/slot (one inserted from Python gets the generic face)."""
@@ -115,16 +115,18 @@ class Plant:
             raise ConfigError("this plant has no PLC (add a [plc] table or [[module]] tables)")
         return ModuleDevice(self.plc.module(rack, slot), self.plc)
 
-    def tes_device(self, slave: int, endpoint: str | None = None) -> TesDevice:
+    def tes_device(self, slave: int, endpoint: str | None = None) -> Device:
         """The TES answering ``slave`` (on ``endpoint`` when given); two on different
         endpoints with that number need the endpoint."""
         found = [
-            d
+            (d, a)
             for d in self.tes_devices
-            if d.tes.slave == slave and (endpoint is None or d.endpoint == endpoint)
+            if isinstance(a := d.address, TesAddress)
+            and a.slave == slave
+            and (endpoint is None or a.endpoint == endpoint)
         ]
         if len(found) == 1:
-            return found[0]
+            return found[0][0]
         have = ", ".join(str(d.address) for d in self.tes_devices) or "none"
         if not found:
             where = f" on {endpoint}" if endpoint is not None else ""
@@ -133,11 +135,15 @@ class Plant:
             )
         raise ConfigError(
             f"slave number {slave} answers on {len(found)} endpoints: name the endpoint,"
-            f" e.g. tes {found[0].endpoint} {slave} ... (have: {have})"
+            f" e.g. tes {found[0][1].endpoint} {slave} ... (have: {have})"
         )
 
     def tes_by_slave(self, slave: int) -> Tes:
-        return self.tes_device(slave).tes
+        """The TES core answering ``slave`` (plant.tes_device(slave) is its device)."""
+        core = tes_core(self.tes_device(slave))
+        if core is None:  # a family-TES device that is no fieldtwin TES
+            raise ConfigError(f"slave number {slave} is no TES core of fieldtwin")
+        return core
 
     # --- endpoints ------------------------------------------------------------
 

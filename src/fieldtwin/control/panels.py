@@ -16,7 +16,6 @@ from fieldtwin.control.resources import Control, fault_json, output_json
 from fieldtwin.devices.face import Device, FrontPanel, Logged, Reading, TesAddress
 from fieldtwin.devices.module import ModuleDevice
 from fieldtwin.errors import FieldtwinError
-from fieldtwin.tsx.discrete.module import DiscreteInputs, DiscreteOutputs
 from fieldtwin.tsx.plc import Plc
 from fieldtwin.words import format_hex
 
@@ -87,8 +86,8 @@ def module_panel(device: ModuleDevice, plc: Plc, ident: str) -> Json:
     entry = plc.slot_entry(a.rack, a.slot)
     image = entry.image
     points = getattr(module, "points", 16)
-    has_inputs = not isinstance(module, DiscreteOutputs)
-    has_outputs = not isinstance(module, DiscreteInputs)
+    has_inputs = module.shows_i_bits
+    has_outputs = module.shows_o_bits
     details = dict(status.details)
     out: Json = {
         "id": ident,

@@ -343,6 +343,17 @@ class Objects(Protocol):
     def write(self, name: str, value: int) -> None: ...
 
 
+def peeker(objects: Objects, name: str) -> Callable[[], int]:
+    """A peek at ``name`` bound once: a window that looks at the same object again and
+    again (the recorder) asks for it without parsing the name each time.  An
+    ``Objects`` may offer ``peeker(name)`` of its own (a TES binds the word's number);
+    any other gets ``lambda: objects.peek(name)``."""
+    own: Callable[[str], Callable[[], int]] | None = getattr(objects, "peeker", None)
+    if own is not None:
+        return own(name)
+    return lambda: objects.peek(name)
+
+
 @dataclass(frozen=True, slots=True)
 class Port:
     """What the runtime may bind: an endpoint URL and the function that opens it."""

@@ -3,6 +3,11 @@
 ``start_tes_endpoints(tes_list, tables, runner)`` groups the TES by endpoint and
 serves each group with the runtime's Modbus server glue; ``build_tes`` reads the
 ``[[tes]]`` tables.  The older path ``fieldtwin.tes.plant`` still gives both.
+
+``tes_core(device)`` and ``tes_registers(tes)`` let the layers above (the plant's
+``plant.tes``, the testing helpers that take a ``Tes``) reach a TES core without
+naming the TES packages themselves (docs/architecture.md, "Only the face above
+devices/").
 """
 
 from __future__ import annotations
@@ -10,7 +15,8 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from fieldtwin.devices.tes.device import modbus_slave
+from fieldtwin.devices.face import Device, Objects
+from fieldtwin.devices.tes.device import TesDevice, TesRegisters, modbus_slave
 from fieldtwin.devices.tes.plantkeys import (
     KEYS,
     build_one,
@@ -28,6 +34,16 @@ from fieldtwin.runtime.runner import Runner
 from fieldtwin.tes.model import Tes
 from fieldtwin.transports.base import LineSettings
 from fieldtwin.transports.url import Endpoint
+
+
+def tes_core(device: Device) -> Tes | None:
+    """The TES core behind a device of the plant (None for any other device)."""
+    return device.tes if isinstance(device, TesDevice) else None
+
+
+def tes_registers(tes: Tes) -> Objects:
+    """A TES core's words as the face's Objects (by address or by map name)."""
+    return TesRegisters(tes)
 
 
 def line_settings(endpoint: Endpoint, devices: Sequence[Tes], link: Link) -> LineSettings:
@@ -66,6 +82,7 @@ def start_tes_endpoints(
 
 __all__ = [
     "KEYS",
+    "Tes",
     "build_one",
     "build_tes",
     "check_lines",
@@ -74,5 +91,7 @@ __all__ = [
     "link_of",
     "serve_group",
     "start_tes_endpoints",
+    "tes_core",
+    "tes_registers",
     "wire_timing_of",
 ]

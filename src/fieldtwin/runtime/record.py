@@ -48,9 +48,8 @@ from typing import Any
 
 from fieldtwin import __version__
 from fieldtwin.clock import MS, Handle, SimClock
-from fieldtwin.devices.face import Device
+from fieldtwin.devices.face import Device, peeker
 from fieldtwin.devices.module import ModuleDevice, PlcObjects
-from fieldtwin.devices.tes import TesDevice
 from fieldtwin.errors import ConfigError, FieldtwinError
 from fieldtwin.runtime.events import Event, EventBus, Subscription
 from fieldtwin.runtime.recfile import (
@@ -67,7 +66,6 @@ from fieldtwin.runtime.recfile import (
 from fieldtwin.runtime.recfile import records as numbered_records
 from fieldtwin.runtime.runner import CloseCallback, ConnectCallback, DataCallback, Runner
 from fieldtwin.transports.base import Listener, Transport
-from fieldtwin.words import parse_word
 
 SAMPLE_MS = 100  # objects and LEDs are looked at this often (simulated ms)
 SAMPLE_PRIORITY = 1 << 30  # after every plant event of the same instant
@@ -235,21 +233,18 @@ class Sampler:
                 self._change(now, "object", address, name, value)
 
     def _peekers(self, device: Device) -> list[tuple[str, Callable[[], object]]]:
-        """(name, peek) of every object of ``device``, made once (a TES word by its
-        number: no name to parse on every look)."""
+        """(name, peek) of every object of ``device``, made once (an object that binds its
+        peek, a TES word by its number: no name to parse on every look)."""
         found = self._names.get(id(device))
         if found is not None:
             return found
         objects = device.objects()
         names = [entry.address for entry in objects.names()[:MAX_OBJECTS]]
-        if isinstance(device, TesDevice):
-            tes = device.tes
-            found = [(name, _bind(tes.peek, parse_word(name))) for name in names]
-        elif isinstance(device, ModuleDevice) and isinstance(objects, PlcObjects):
+        if isinstance(device, ModuleDevice) and isinstance(objects, PlcObjects):
             # the module's own PL7 objects (its names): the PLC reads them, no side effect
             found = [(name, _bind(device.plc.read, name)) for name in names]
         else:
-            found = [(name, _bind(objects.peek, name)) for name in names]
+            found = [(name, peeker(objects, name)) for name in names]
         self._names[id(device)] = found
         return found
 

@@ -16,8 +16,8 @@ from typing import Any
 import pytest
 
 from fieldtwin.errors import ConfigError
+from fieldtwin.facade.tes import Tes
 from fieldtwin.plant import Plant, build_plant, read_plant
-from fieldtwin.tes.model import Tes
 from fieldtwin.testing import helpers
 from fieldtwin.testing.process import PlantStartError, RunningPlant
 from fieldtwin.tsx.plc import Plc

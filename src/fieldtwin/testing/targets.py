@@ -16,10 +16,9 @@ from typing import Protocol
 from fieldtwin.clock import S, SimClock
 from fieldtwin.devices.face import Device, device_id
 from fieldtwin.devices.module import ModuleDevice
-from fieldtwin.devices.tes import TesRegisters
 from fieldtwin.errors import ConfigError
+from fieldtwin.facade.tes import Tes, tes_registers
 from fieldtwin.plant import Plant
-from fieldtwin.tes.model import Tes
 from fieldtwin.tsx.addressing import parse_module
 from fieldtwin.tsx.bus import Pacer
 from fieldtwin.tsx.plc import Plc
@@ -200,14 +199,14 @@ class TesTarget(_Clocked):
     def __post_init__(self) -> None:
         self.clock = self.tes.clock
         self.pacer = lambda: None
-        self._words = TesRegisters(self.tes)
+        self._words = tes_registers(self.tes)
 
     @property
     def label(self) -> str:
         return f"{self.tes.model.name} slave {self.tes.slave}"
 
     def value(self, name: str) -> int:
-        return self.tes.peek(self._words.address(name))
+        return self._words.peek(name)
 
     def leds(self, device: str | None) -> tuple[str, dict[str, str]]:
         return self.label, {k: str(v) for k, v in self.tes.leds.items()}

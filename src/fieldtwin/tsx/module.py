@@ -87,6 +87,10 @@ class IntelligentModule:
     version_text: ClassVar[str] = "INTELLIGENT MODULE V1.0"
     has_run_stop: ClassVar[bool] = True  # OWxy,0,C drives IWxy,0,C
     discrete_outputs: ClassVar[int] = 0  # Oxy,0.. a module has
+    # Which bit rows of the slot a front shows: Ixy,i (the module's I bits) and Oxy,i
+    # (the PLC's O bits); a discrete input module has no O bits, an output module no I bits
+    shows_i_bits: ClassVar[bool] = True
+    shows_o_bits: ClassVar[bool] = True
     # which terminal-block fault bit of the fault string drives IWxy,0,A (None: none)
     terminal_block_fault_bit: ClassVar[int | None] = None
     # The LEDs of the front panel, as printed on it (AEM 4.4-1 "F", "OK", "ERR")

@@ -128,6 +128,12 @@ class TesRegisters:
     def peek(self, name: str) -> int:
         return self._tes.peek(self.address(name))
 
+    def peeker(self, name: str) -> Callable[[], int]:
+        """A peek at ``name`` with its word number found once (face.peeker)."""
+        address = self.address(name)
+        tes = self._tes
+        return lambda: tes.peek(address)
+
     def write(self, name: str, value: int) -> None:
         self._tes.write(self.address(name), value)
 

@@ -21,6 +21,7 @@ class DiscreteInputs(IntelligentModule):
     self_test_us: ClassVar[int] = 1 * MS
     has_run_stop: ClassVar[bool] = False
     points: ClassVar[int] = POINTS
+    shows_o_bits: ClassVar[bool] = False
 
     def __init__(self, *args: object, **kwargs: object) -> None:
         super().__init__(*args, **kwargs)  # type: ignore[arg-type]
@@ -70,6 +71,7 @@ class DiscreteOutputs(IntelligentModule):
     self_test_us: ClassVar[int] = 1 * MS
     has_run_stop: ClassVar[bool] = False
     discrete_outputs: ClassVar[int] = POINTS
+    shows_i_bits: ClassVar[bool] = False
 
     def __init__(self, *args: object, **kwargs: object) -> None:
         super().__init__(*args, **kwargs)  # type: ignore[arg-type]
