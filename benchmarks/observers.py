@@ -4,8 +4,10 @@ Six ``fieldtwin run`` processes (a TES 32EST, slave 1, on a free loopback port; 
 control API on a free port; ``--speed 1``) are started once:
 
 * ``plain``   nothing watches;
-* ``sub1``    one ``/events`` WebSocket subscriber (every kind);
-* ``sub4``    four ``/events`` subscribers;
+* ``sub1``    one ``/events`` WebSocket subscriber (every kind; ``batch=1``, as
+              fieldtwin.client and the dashboard subscribe);
+* ``sub4``    four ``/events`` subscribers (the same);
+* ``sub1each`` one subscriber taking one event per message (no ``batch``: websocat);
 * ``trace``   ``--trace FILE``;
 * ``pcap``    ``--pcap FILE``;
 * ``record``  ``--record FILE``.
@@ -50,8 +52,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO
 
-CASES = ("plain", "sub1", "sub4", "trace", "pcap", "record")
-SUBSCRIBERS = {"sub1": 1, "sub4": 4}
+CASES = ("plain", "sub1", "sub4", "trace", "pcap", "record", "sub1each")
+SUBSCRIBERS = {"sub1": 1, "sub4": 4, "sub1each": 1}
 CONNS = 8
 ADDR = 37
 START_TIMEOUT_S = 60.0
@@ -79,13 +81,14 @@ def subscribe_main(url: str, count: int) -> None:
         async with ws_client.connect(url, max_size=2**24, ping_interval=None) as socket:
             ready.release()
             async for message in socket:
-                item = json.loads(message)
-                received[index] += 1
-                kind = item.get("kind")
-                if kind == "modbus":
-                    modbus[index] += 1
-                elif kind == "dropped":
-                    dropped[index] += int(item["count"])
+                items = json.loads(message)
+                for item in items if isinstance(items, list) else [items]:
+                    received[index] += 1
+                    kind = item.get("kind")
+                    if kind == "modbus":
+                        modbus[index] += 1
+                    elif kind == "dropped":
+                        dropped[index] += int(item["count"])
 
     ready = threading.Semaphore(0)
 
@@ -183,6 +186,7 @@ def start(case: str, tmp: Path) -> Server:
     server = Server(case, proc, port, control, files)
     if case in SUBSCRIBERS:
         url = control.replace("http://", "ws://") + "/events"
+        url += "" if case.endswith("each") else "?batch=1"
         sub = subprocess.Popen(
             [sys.executable, __file__, "--subscribe", url, str(SUBSCRIBERS[case])],
             stdin=subprocess.PIPE,
@@ -308,7 +312,7 @@ def report(servers: dict[str, Server], duration: float, reps: int) -> None:
         f"{duration:g} s x {reps} alternated runs, {os.cpu_count()} CPUs, "
         f"load average {os.getloadavg()[0]:.2f}"
     )
-    print(f"{'case':<8} {'req/s':>8} {'ratio':>6} {'cpu us/req':>10} {'cpu ratio':>9}  observers")
+    print(f"{'case':<9} {'req/s':>8} {'ratio':>6} {'cpu us/req':>10} {'cpu ratio':>9}  observers")
     for case, server in servers.items():
         rps, cpu = statistics.median(server.rps), statistics.median(server.cpu_us)
         seen = ""
@@ -318,7 +322,7 @@ def report(servers: dict[str, Server], duration: float, reps: int) -> None:
             seen = f"events {got} + dropped {lost}"
         seen = seen or file_counts(server)
         print(
-            f"{case:<8} {rps:8.0f} {rps / plain:5.2f}x {cpu:10.1f} {cpu / plain_cpu:8.2f}x  {seen}"
+            f"{case:<9} {rps:8.0f} {rps / plain:5.2f}x {cpu:10.1f} {cpu / plain_cpu:8.2f}x  {seen}"
         )
 
 
