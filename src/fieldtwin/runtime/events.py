@@ -41,8 +41,13 @@ DEFAULT_QUEUE = 10_000  # events a subscriber may have unread before the oldest 
 MAX_SUBSCRIBERS = 64  # subscriptions one bus accepts at once
 FEED = 100_000  # raw records the simulation's thread may have handed the observers unread
 BATCH_S = 0.005  # the observers' thread takes the buffer this often (while it holds any)
-CHUNK = 512  # records handled between two yields of the observers' thread
+CHUNK = 64  # records handled between two yields of the observers' thread
+YIELD_S = 0.0001  # a yield: long enough for the simulation's thread to take the interpreter
+SWITCH_S = 0.0005  # the interpreter's switch interval once started (Python's default: 5 ms)
 STOP_WAIT_S = 10.0  # close() waits this long for the observers' thread
+
+# as Starlette's send_json: compact, not ASCII-escaped (one encoder, made once)
+_ENCODE = json.JSONEncoder(separators=(",", ":"), ensure_ascii=False).encode
 
 Listener = Callable[[int, str, str, Mapping[str, object]], None]
 
@@ -65,7 +70,7 @@ class Event:
         once however many subscribers send it."""
         text = self._text
         if not text:
-            text.append(json.dumps(self.as_dict(), separators=(",", ":"), ensure_ascii=False))
+            text.append(_ENCODE(self.as_dict()))
         return text[0]
 
 
@@ -225,14 +230,18 @@ class EventBus:
                     except Exception as exc:  # a decoder's bug: told, the plant runs on
                         self._failed(exc)
                 handled += count
+                self._wake_subscribers()  # a file writer drains its queue chunk by chunk
                 if feed:
-                    time.sleep(0)  # the simulation's thread may want the interpreter back
-            lost, self._lost = self._lost, 0
-            for sub in self._subs:
-                if lost:
-                    sub._lost(lost)
-                sub._wake()
+                    time.sleep(YIELD_S)  # the simulation's thread may want the interpreter
+            self._wake_subscribers()
         return handled
+
+    def _wake_subscribers(self) -> None:
+        lost, self._lost = self._lost, 0
+        for sub in self._subs:
+            if lost:
+                sub._lost(lost)
+            sub._wake()
 
     def _failed(self, exc: Exception) -> None:
         self.errors += 1
@@ -244,6 +253,10 @@ class EventBus:
         observers' does the work (idempotent)."""
         if self._thread is not None:
             return
+        # a thread waiting for the interpreter (the simulation's, back from a socket call)
+        # gets it after this long at most, not after Python's 5 ms (the web server's
+        # thread runs Python too): the observers' work never holds the plant long
+        sys.setswitchinterval(min(sys.getswitchinterval(), SWITCH_S))
         self._feed = deque()
         self._thread = threading.Thread(target=self._run, name="fieldtwin-observers", daemon=True)
         self._thread.start()

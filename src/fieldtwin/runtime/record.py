@@ -47,9 +47,9 @@ from __future__ import annotations
 
 import gzip
 import json
-import queue
 import threading
 import time
+from collections import deque
 from collections.abc import Callable, Collection, Generator, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -87,6 +87,7 @@ OUTPUTS = OUTPUT_KINDS
 ORIGINAL_SEND = "_fieldtwin_unrecorded_send"  # where a recorded transport keeps its send
 QUEUE = 50_000  # records handed to the writer and not yet written: past it the plant waits
 WRITE_BATCH = 2000  # records the writer's thread turns into one compressed write
+WRITE_S = 0.01  # the writer's thread takes what was queued this often
 
 
 @dataclass(frozen=True, slots=True)
@@ -171,7 +172,9 @@ class RecordWriter:
         self.waits = 0
         self.failed: BaseException | None = None  # what stopped the writer's thread
         self._file.write(_line(header.as_json()))
-        self._queue: queue.Queue[Record | None] = queue.Queue(QUEUE)
+        self._queue: deque[Record] = deque()
+        self._room = threading.Condition()
+        self._ending = False
         self._thread: threading.Thread | None = threading.Thread(
             target=self._write_all, name="fieldtwin-record", daemon=True
         )
@@ -184,40 +187,42 @@ class RecordWriter:
             return
         if self.failed is not None:
             raise self.failed
-        self.records += 1
-        try:
-            self._queue.put_nowait(record)
-        except queue.Full:
+        pending = self._queue
+        if len(pending) >= QUEUE:
             started = time.perf_counter()
-            self._queue.put(record)
+            with self._room:
+                while len(pending) >= QUEUE and self.failed is None:
+                    self._room.wait(WRITE_S)
             self.waited_s += time.perf_counter() - started
             self.waits += 1
+        self.records += 1
+        pending.append(record)
 
     def _write_all(self) -> None:
-        file, take = self._file, self._queue.get
+        file, pending = self._file, self._queue
         assert file is not None
-        ended = False
-        while not ended:
-            batch = [take()]
-            while len(batch) < WRITE_BATCH:
-                try:
-                    batch.append(self._queue.get_nowait())
-                except queue.Empty:
-                    break
-            if batch[-1] is None:
-                ended = True
-                batch.pop()
-            if self.failed is None:
-                try:
-                    file.write(b"".join(_line(record) for record in batch))
-                except (OSError, ValueError) as exc:
-                    self.failed = exc  # told on the next add() or on close()
+        while True:
+            ending = self._ending
+            if not ending:
+                time.sleep(WRITE_S)  # a batch gathers: no wake-up per record
+            while pending:
+                count = min(WRITE_BATCH, len(pending))
+                batch = [pending.popleft() for _ in range(count)]
+                if self.failed is None:
+                    try:
+                        file.write(b"".join(_line(record) for record in batch))
+                    except (OSError, ValueError) as exc:
+                        self.failed = exc  # told on the next add() or on close()
+                with self._room:
+                    self._room.notify_all()
+            if ending:
+                return
 
     def close(self) -> None:
         """Write what is queued, then close the file (idempotent)."""
         thread, self._thread = self._thread, None
         if thread is not None:
-            self._queue.put(None)
+            self._ending = True
             thread.join()
         if self._file is not None:
             file, self._file = self._file, None

@@ -20,6 +20,7 @@ per block the line delivered.
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import lru_cache
 
 from fieldtwin.clock import MS, Handle, SimClock
 from fieldtwin.errors import ProtocolError
@@ -185,7 +186,8 @@ class Stream:
         self.conn = conn
         self._mbap = MbapDecoder()
         self._framer = RtuFramer(tap.timing, request_length) if tap.timing is not None else None
-        self._pending: dict[int, dict[str, object]] = {}  # transaction or slave -> request
+        # transaction or slave -> (address, count, the PDU of a write) of its request
+        self._pending: dict[int, tuple[object, object, bytes | None]] = {}
         self.rtu = self._framer is not None
         self._states: tuple[State, ...] | None = None  # what the record being decoded met
 
@@ -232,10 +234,15 @@ class Stream:
             self._mbap = MbapDecoder()
             self._publish(now, IN, None, {"error": str(exc), "hex": data[:260].hex()})
             return
+        whole = len(frames) == 1 and len(data) == 7 + len(frames[0].pdu)  # the usual chunk
         for frame in frames:
-            raw = _mbap_bytes(frame.transaction, frame.protocol, frame.unit, frame.pdu)
+            raw = (
+                data
+                if whole
+                else _mbap_bytes(frame.transaction, frame.protocol, frame.unit, frame.pdu)
+            )
             fields: dict[str, object] = {"transaction": frame.transaction, "hex": raw.hex()}
-            fields.update(request_fields(frame.pdu))
+            fields.update(_request_items(frame.pdu))
             fields["tes"] = self.tap.outcomes(frame.unit, frame.pdu, False, self._states)
             self._remember(frame.transaction, frame.unit, fields, frame.pdu)
             self._publish(now, IN, frame.unit, fields)
@@ -245,7 +252,7 @@ class Stream:
             return
         transaction, unit, pdu = (data[0] << 8) | data[1], data[6], data[7:]
         fields: dict[str, object] = {"transaction": transaction, "hex": data.hex()}
-        write = self._pending.get(transaction, {}).get("_pdu")
+        write = self._pending.get(transaction, _NOTHING)[2]
         fields.update(self._reply(transaction, unit, pdu))
         self._publish(now, OUT, unit, fields)
         self._register(now, unit, write, pdu)
@@ -264,7 +271,7 @@ class Stream:
                 continue
             slave, pdu = event.slave, event.pdu
             fields = {"crc": "good", "hex": event.data.hex()}
-            fields.update(request_fields(pdu))
+            fields.update(_request_items(pdu))
             fields["tes"] = self.tap.outcomes(slave, pdu, True, self._states)
             self._remember(slave, slave, fields, pdu)
             self._publish(event.at, IN, slave, fields)
@@ -276,7 +283,7 @@ class Stream:
             return
         slave = data[0]
         fields: dict[str, object] = {"crc": "good" if crc_ok(data) else "bad", "hex": data.hex()}
-        write = self._pending.get(slave, {}).get("_pdu")
+        write = self._pending.get(slave, _NOTHING)[2]
         fields.update(self._reply(slave, slave, data[1:-2]))
         self._publish(now, OUT, slave, fields)
         self._register(now, slave, write, data[1:-2])
@@ -286,17 +293,16 @@ class Stream:
     def _remember(self, key: int, unit: int, fields: dict[str, object], pdu: bytes) -> None:
         if len(self._pending) >= MAX_PENDING:
             self._pending.pop(next(iter(self._pending)))
-        self._pending[key] = {"unit": unit, **fields}
-        if pdu and pdu[0] in WRITE_FUNCTIONS:
-            self._pending[key]["_pdu"] = pdu
+        write = pdu if pdu and pdu[0] in WRITE_FUNCTIONS else None
+        self._pending[key] = (fields.get("address"), fields.get("count"), write)
 
     def _register(self, now: int, unit: int, request: object, reply: bytes) -> None:
         """A write the TES answered without an exception: a ``register`` event."""
         if not isinstance(request, bytes) or not reply or reply[0] & EXCEPTION_FLAG:
             return
-        device = self.tap.slaves.get(unit)
-        if device is not None:
-            self._wrote(now, unit, device_name(device), request)
+        name = self.tap.names.get(unit)
+        if name is not None:
+            self._wrote(now, unit, name, request)
 
     def _broadcast(self, now: int, pdu: bytes, fields: dict[str, object]) -> None:
         outcomes = fields.get("tes")
@@ -327,17 +333,27 @@ class Stream:
         fields = reply_fields(pdu)
         request = self._pending.pop(key, None)
         if request is not None:
-            for name in ("address", "count"):
-                if name in request:
-                    fields[name] = request[name]
-        device = self.tap.slaves.get(unit)
-        fields["from"] = device_name(device) if device is not None else "server"
+            address, count, _ = request
+            if address is not None:
+                fields["address"] = address
+            if count is not None:
+                fields["count"] = count
+        fields["from"] = self.tap.names.get(unit, "server")
         return fields
 
     def _publish(
         self, t_us: int, direction: str, slave: int | None, fields: dict[str, object]
     ) -> None:
         self.tap.publish(t_us, direction, slave, self.conn, fields)
+
+
+_NOTHING: tuple[object, object, bytes | None] = (None, None, None)
+
+
+@lru_cache(maxsize=4096)
+def _request_items(pdu: bytes) -> tuple[tuple[str, object], ...]:
+    """``request_fields`` of a PDU, remembered (a master polls the same requests)."""
+    return tuple(request_fields(pdu).items())
 
 
 def _mbap_bytes(transaction: int, protocol: int, unit: int, pdu: bytes) -> bytes:
@@ -363,6 +379,9 @@ class Wiretap:
         self.transport = transport  # "tcp", "rtu+tcp", "rtu"
         self.slaves = slaves
         self.timing = timing  # None: MBAP framing
+        self.names = {slaves.number_of(d): device_name(d) for d in slaves.devices}
+        self._numbered = tuple((d, slaves.number_of(d), device_name(d)) for d in slaves.devices)
+        self._outcomes: dict[tuple[object, ...], dict[str, str]] = {}  # remembered, bounded
 
     def stream(self, conn: str) -> Stream:
         return Stream(self, conn)
@@ -379,23 +398,35 @@ class Wiretap:
         ``states`` (what the request met; read now when not given)."""
         if states is None:
             states = self.states(rtu)
+        writes = bool(pdu) and pdu[0] in WRITE_FUNCTIONS
+        key = (unit, writes, rtu, states)
+        known = self._outcomes.get(key)
+        if known is not None:
+            return dict(known)
+        out = self._outcomes_of(unit, writes, rtu, states)
+        if len(self._outcomes) >= MAX_PENDING:
+            self._outcomes.clear()
+        self._outcomes[key] = out
+        return dict(out)
+
+    def _outcomes_of(
+        self, unit: int, writes: bool, rtu: bool, states: tuple[State, ...]
+    ) -> dict[str, str]:
         out: dict[str, str] = {}
-        devices = self.slaves.devices
-        for device, meets in zip(devices, states, strict=True):
-            number = self.slaves.number_of(device)
+        single = len(self._numbered) == 1
+        for (_, number, name), meets in zip(self._numbered, states, strict=True):
             if unit == BROADCAST:
                 result = outcome_of(meets)
-                writes = bool(pdu) and pdu[0] in WRITE_FUNCTIONS
                 if result == ANSWERS:
                     result = BROADCAST_EXECUTED if writes else BROADCAST_IGNORED
-                out[device_name(device)] = result
-            elif number == unit or (not rtu and unit == 0xFF and len(devices) == 1):
+                out[name] = result
+            elif number == unit or (not rtu and unit == 0xFF and single):
                 result = outcome_of(meets)
                 if result == ANSWERS and meets is not None and meets[3]:
                     result = f"{ANSWERS} after {_late_ms(meets):g} ms"
-                out[device_name(device)] = result
+                out[name] = result
             else:
-                out[device_name(device)] = NOT_ADDRESSED
+                out[name] = NOT_ADDRESSED
         return out
 
     def publish(
