@@ -128,6 +128,7 @@ class Server:
     cpu_us: list[float] = field(default_factory=list)
     sent: int = 0  # requests answered (warm-up included)
     events: list[tuple[int, int]] = field(default_factory=list)  # (modbus, dropped) per run
+    told: list[str] = field(default_factory=list)  # what it said on closing that matters
 
     def ticks(self) -> int:
         try:
@@ -182,8 +183,8 @@ def start(case: str, tmp: Path) -> Server:
     except BaseException:
         _stop(proc)
         raise
-    threading.Thread(target=_drain_output, args=(proc.stdout,), daemon=True).start()
     server = Server(case, proc, port, control, files)
+    threading.Thread(target=_drain_output, args=(proc.stdout, server), daemon=True).start()
     if case in SUBSCRIBERS:
         url = control.replace("http://", "ws://") + "/events"
         url += "" if case.endswith("each") else "?batch=1"
@@ -200,9 +201,10 @@ def start(case: str, tmp: Path) -> Server:
     return server
 
 
-def _drain_output(stream: IO[str]) -> None:
-    for _ in stream:
-        pass
+def _drain_output(stream: IO[str], server: Server) -> None:
+    for line in stream:
+        if "waited" in line or "observer failed" in line:  # a recording's writer; a bug
+            server.told.append(line.strip())
 
 
 def _stop(proc: subprocess.Popen[str], sig: int = signal.SIGINT) -> None:
@@ -281,7 +283,8 @@ def file_counts(server: Server) -> str:
     if "record" in server.files:
         with gzip.open(server.files["record"], "rb") as f:
             data = sum(1 for line in f if line.startswith(b'["data"'))
-        return f"record: {data} data inputs of {server.sent} requests"
+        waited = "; ".join(server.told) or "the plant never waited for the writer"
+        return f"record: {data} data inputs of {server.sent} requests; {waited}"
     return ""
 
 
