@@ -305,6 +305,7 @@ def _run(args: argparse.Namespace) -> int:
     runner = Runner(clock, speed)
     stop_on_signals(runner)  # from here on a stop is never lost (issue 20)
     plant = build_plant(plant_file, runner=runner, speed=speed)
+    plant.events.start()  # the observers' work on a thread of theirs (DESIGN rule 13)
     control: Launched | None = None
     try:
         recorders = _recorders(args, plant.events)  # before any port opens: no frame is missed
@@ -321,6 +322,7 @@ def _run(args: argparse.Namespace) -> int:
     except BaseException:
         if control is not None:
             control.close()
+        plant.events.close()
         plant.close()
         raise
     plant.bindings.append(binding)
@@ -381,6 +383,7 @@ def _run(args: argparse.Namespace) -> int:
         final = [] if live else plain_status(plant)  # the plant as it stopped (issue 10 item 21)
         if control is not None:
             control.close()
+        plant.events.close()  # what the observers still hold reaches the files first
         plant.close()
     if final:
         print("\n".join(final), flush=True)
@@ -454,7 +457,13 @@ def _start_recording(
     header = replace(recording_header(plant.source, runner.speed), console="modes")
     recorder = Recorder(args.record, header, plant.clock, plant.devices, plant.events, runner)
     plant.recorder = recorder
-    recorders.add([], recorder.close)
+
+    def close() -> None:
+        recorder.close()
+        if recorder.waited is not None:  # docs/record.md: a recording is never cut short
+            print(f"fieldtwin: {recorder.waited}", file=sys.stderr, flush=True)
+
+    recorders.add([], close)
 
 
 def _start_control(

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import time
+from collections import deque
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from types import TracebackType
@@ -60,6 +61,7 @@ class EventStream:
         self._socket = socket.__enter__()  # websockets wants its connection entered
         self._timeout_s = timeout_s
         self._closed = False
+        self._batch: deque[dict[str, Any]] = deque()  # the rest of the last message
 
     def __iter__(self) -> Iterator[dict[str, Any]]:
         return self
@@ -67,12 +69,16 @@ class EventStream:
     def __next__(self) -> dict[str, Any]:
         from websockets.exceptions import ConnectionClosed
 
-        try:
-            message = self._socket.recv(timeout=self._timeout_s)
-        except (TimeoutError, ConnectionClosed):
-            self.close()
-            raise StopIteration from None
-        return dict(json.loads(message))
+        while not self._batch:
+            try:
+                message = self._socket.recv(timeout=self._timeout_s)
+            except (TimeoutError, ConnectionClosed):
+                self.close()
+                raise StopIteration from None
+            items = json.loads(message)  # a batch (the stream is asked for batches)
+            batch = items if isinstance(items, list) else [items]
+            self._batch.extend(dict(item) for item in batch)
+        return self._batch.popleft()
 
     def __enter__(self) -> EventStream:
         return self
@@ -291,7 +297,7 @@ class Client:
         from websockets.exceptions import InvalidHandshake
         from websockets.sync.client import connect
 
-        query: dict[str, str] = {}
+        query: dict[str, str] = {"batch": "1"}
         if kinds:
             query["kind"] = ",".join(kinds)
         if devices:

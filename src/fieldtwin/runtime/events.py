@@ -1,23 +1,55 @@
 """The plant's event bus: what windows onto the running plant observe (DESIGN rule 13).
 
-Publishers (the Modbus servers, the SCM endpoints, the PLC cycle) call
-``bus.publish(...)`` from the simulation's thread, at the simulated instant the
-thing happened.  Subscribers (the control API's event stream, a trace file, the
-console's ``trace`` command) each get a bounded queue: when a subscriber does
-not keep up, its oldest events are dropped and counted, so an observer never
-slows the plant nor grows its memory (DESIGN rule 14).  ``bus.active`` tells a
+Publishers (the Modbus servers' wiretaps, the SCM endpoints, the PLC cycle) call
+``bus.publish(...)`` or ``bus.post(...)`` from the simulation's thread, at the
+simulated instant the thing happened.  Subscribers (the control API's event stream, a
+trace file, a pcap, the console's ``trace`` command) each get a bounded queue: when a
+subscriber does not keep up, its oldest events are dropped and counted, so an observer
+never slows the plant nor grows its memory (DESIGN rule 14).  ``bus.active`` tells a
 publisher whether anybody listens, so that an unobserved plant pays nothing.
+
+Off the hot path: once ``start()`` was called (``fieldtwin run``), what the simulation's
+thread hands the bus is only appended, as a compact raw record (a callable and its
+arguments: the bytes of a frame, the time, the small tuple of a device's state), to
+one bounded buffer (``FEED`` records).  The observers' thread takes the whole buffer
+every ``BATCH_S`` and does the work there, in order: framing and decoding the frames
+(``fieldtwin.runtime.wiretap``), building the events, filling the subscriptions, then
+waking each subscriber once per batch (a trace or pcap writer writes its file then,
+the event stream sends its batch).  Were the buffer ever full (the observers' thread
+starved), a record is lost and counted as dropped for every subscriber.  Without
+``start()`` (tests, the console) a record is handled at once on the caller's thread,
+as before.
+
+``listen(kinds, callback)`` is the one exception: the callback runs on the simulation's
+thread at the instant of publication (a recording's SCM and DEM records, which must
+stay in order with the bytes it logs; it does no more than append them to its own
+writer's queue, fieldtwin.runtime.record).
 """
 
 from __future__ import annotations
 
+import json
+import sys
 import threading
+import time
 from collections import deque
 from collections.abc import Callable, Collection, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any
 
 DEFAULT_QUEUE = 10_000  # events a subscriber may have unread before the oldest are dropped
 MAX_SUBSCRIBERS = 64  # subscriptions one bus accepts at once
+FEED = 100_000  # raw records the simulation's thread may have handed the observers unread
+BATCH_S = 0.005  # the observers' thread takes the buffer this often (while it holds any)
+CHUNK = 64  # records handled between two yields of the observers' thread
+YIELD_S = 0.0001  # a yield: long enough for the simulation's thread to take the interpreter
+SWITCH_S = 0.0005  # the interpreter's switch interval once started (Python's default: 5 ms)
+STOP_WAIT_S = 10.0  # close() waits this long for the observers' thread
+
+# as Starlette's send_json: compact, not ASCII-escaped (one encoder, made once)
+_ENCODE = json.JSONEncoder(separators=(",", ":"), ensure_ascii=False).encode
+
+Listener = Callable[[int, str, str, Mapping[str, object]], None]
 
 
 @dataclass(frozen=True, slots=True)
@@ -28,9 +60,18 @@ class Event:
     kind: str  # "modbus", "serial", "object", "led", "dem", "register", "clock", ...
     device: str  # the device's address as the Device face writes it ("5", "tcp://...:5020 1")
     data: Mapping[str, object]
+    _text: list[str] = field(default_factory=list, compare=False, repr=False)
 
     def as_dict(self) -> dict[str, object]:
         return {"t_s": self.t_us / 1e6, "kind": self.kind, "device": self.device, **self.data}
+
+    def json(self) -> str:
+        """``as_dict()`` as compact JSON (as Starlette's ``send_json`` writes it), made
+        once however many subscribers send it."""
+        text = self._text
+        if not text:
+            text.append(_ENCODE(self.as_dict()))
+        return text[0]
 
 
 class Subscription:
@@ -50,6 +91,7 @@ class Subscription:
         self._queue: deque[Event] = deque(maxlen=maxlen)
         self._lock = threading.Lock()
         self._notify = notify
+        self._fresh = False  # events came since the last wake-up (the observers' thread)
         self.dropped = 0  # events lost because this subscriber did not keep up
         self.closed = False
 
@@ -58,13 +100,26 @@ class Subscription:
             self.devices is None or event.device in self.devices
         )
 
-    def _put(self, event: Event) -> None:
+    def _put(self, event: Event, notify: bool = True) -> None:
         with self._lock:
             if len(self._queue) == self._queue.maxlen:
                 self.dropped += 1
             self._queue.append(event)
-        if self._notify is not None:
+        if not notify:
+            self._fresh = True
+        elif self._notify is not None:
             self._notify()
+
+    def _lost(self, count: int) -> None:
+        with self._lock:
+            self.dropped += count
+        self._fresh = True
+
+    def _wake(self) -> None:
+        if self._fresh:
+            self._fresh = False
+            if self._notify is not None:
+                self._notify()
 
     def take(self, limit: int = 1000) -> list[Event]:
         """Up to ``limit`` events, oldest first (never blocks)."""
@@ -81,28 +136,154 @@ class Subscription:
 
 
 class EventBus:
-    """Fan-out of events to bounded subscriptions."""
+    """Fan-out of events to bounded subscriptions (see the module docstring)."""
 
-    def __init__(self, max_subscribers: int = MAX_SUBSCRIBERS) -> None:
+    def __init__(self, max_subscribers: int = MAX_SUBSCRIBERS, feed: int = FEED) -> None:
         self._subs: tuple[Subscription, ...] = ()
+        self._listeners: tuple[tuple[frozenset[str], Listener], ...] = ()
         self._lock = threading.Lock()
         self.max_subscribers = max_subscribers
         self.published = 0
+        self.feed_size = feed
+        self._feed: deque[tuple[Any, ...]] | None = None  # None: records handled at once
+        self._lost = 0  # records the full buffer refused (the observers' thread adds them up)
+        self._round = threading.Lock()  # one round of the observers' work at a time
+        self._wake = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._closing = False
+        self.errors = 0  # records whose handling raised (a bug: said once on stderr)
 
     @property
     def active(self) -> bool:
         """True while somebody listens: publishers may skip building events otherwise."""
+        return bool(self._subs) or bool(self._listeners)
+
+    @property
+    def watched(self) -> bool:
+        """True while a subscription exists (a wiretap's frames go only to those)."""
         return bool(self._subs)
 
+    # --- the simulation's side ---------------------------------------------------------
+
+    def post(self, record: tuple[Any, ...]) -> None:
+        """Hand the observers one raw record: ``(handler, *args)``; the handler runs on the
+        observers' side (at once when the bus was not started)."""
+        feed = self._feed
+        if feed is None:
+            record[0](*record[1:])
+            return
+        if len(feed) >= self.feed_size:
+            self._lost += 1
+            return
+        feed.append(record)
+        if len(feed) == 1:
+            self._wake.set()
+
     def publish(self, t_us: int, kind: str, device: str, data: Mapping[str, object]) -> None:
+        for kinds, callback in self._listeners:
+            if kind in kinds:
+                callback(t_us, kind, device, data)
+        if self._subs:
+            self.post((self.deliver, t_us, kind, device, data))
+
+    def listen(self, kinds: Collection[str], callback: Listener) -> Callable[[], None]:
+        """Call ``callback(t_us, kind, device, data)`` on the publishing (simulation's)
+        thread for every event of ``kinds``; returns what stops it."""
+        entry = (frozenset(kinds), callback)
+        with self._lock:
+            self._listeners = (*self._listeners, entry)
+
+        def stop() -> None:
+            with self._lock:
+                self._listeners = tuple(e for e in self._listeners if e is not entry)
+
+        return stop
+
+    # --- the observers' side -----------------------------------------------------------
+
+    def deliver(self, t_us: int, kind: str, device: str, data: Mapping[str, object]) -> None:
+        """One event to every subscription that wants it (the observers' side)."""
         subs = self._subs
         if not subs:
             return
         event = Event(t_us, kind, device, data)
         self.published += 1
+        inline = self._feed is None
         for sub in subs:
             if sub.wants(event):
-                sub._put(event)
+                sub._put(event, inline)
+
+    def process(self) -> int:
+        """Handle every record waiting, in order, then wake the subscribers that got
+        events; returns how many records were handled."""
+        feed = self._feed
+        if feed is None:
+            return 0
+        handled = 0
+        with self._round:
+            while feed:
+                count = min(CHUNK, len(feed))
+                for _ in range(count):
+                    record = feed.popleft()
+                    try:
+                        record[0](*record[1:])
+                    except Exception as exc:  # a decoder's bug: told, the plant runs on
+                        self._failed(exc)
+                handled += count
+                self._wake_subscribers()  # a file writer drains its queue chunk by chunk
+                if feed:
+                    time.sleep(YIELD_S)  # the simulation's thread may want the interpreter
+            self._wake_subscribers()
+        return handled
+
+    def _wake_subscribers(self) -> None:
+        lost, self._lost = self._lost, 0
+        for sub in self._subs:
+            if lost:
+                sub._lost(lost)
+            sub._wake()
+
+    def _failed(self, exc: Exception) -> None:
+        self.errors += 1
+        if self.errors == 1:
+            print(f"fieldtwin: an observer failed ({exc!r}); said once", file=sys.stderr)
+
+    def start(self) -> None:
+        """From now on the simulation's thread only appends records; a thread of the
+        observers' does the work (idempotent)."""
+        if self._thread is not None:
+            return
+        # a thread waiting for the interpreter (the simulation's, back from a socket call)
+        # gets it after this long at most, not after Python's 5 ms (the web server's
+        # thread runs Python too): the observers' work never holds the plant long
+        sys.setswitchinterval(min(sys.getswitchinterval(), SWITCH_S))
+        self._feed = deque()
+        self._thread = threading.Thread(target=self._run, name="fieldtwin-observers", daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        while not self._closing:
+            self._wake.wait(1.0)
+            if self._closing:
+                break
+            self._wake.clear()
+            time.sleep(BATCH_S)  # a batch gathers: one round per batch, not per record
+            self.process()
+        self.process()
+
+    def close(self) -> None:
+        """Handle what is left and stop the observers' thread (idempotent)."""
+        thread = self._thread
+        if thread is None:
+            return
+        self._closing = True
+        self._wake.set()
+        if thread is not threading.current_thread():
+            thread.join(STOP_WAIT_S)
+        self.process()
+        self._feed = None  # what is published from now on is handled at once
+
+    # --- subscriptions -----------------------------------------------------------------
 
     def subscribe(
         self,
@@ -112,7 +293,8 @@ class EventBus:
         maxlen: int = DEFAULT_QUEUE,
         notify: Callable[[], None] | None = None,
     ) -> Subscription:
-        """A new subscription; ``notify`` is called (from the simulation's thread) on each event."""
+        """A new subscription; ``notify`` is called when events came: on each event when
+        the bus was not started, else once per batch from the observers' thread."""
         if maxlen < 1:
             raise ValueError("a subscription holds at least one event")
         sub = Subscription(self, kinds, devices, maxlen, notify)
@@ -127,4 +309,12 @@ class EventBus:
             self._subs = tuple(s for s in self._subs if s is not sub)
 
 
-__all__ = ["DEFAULT_QUEUE", "MAX_SUBSCRIBERS", "Event", "EventBus", "Subscription"]
+__all__ = [
+    "BATCH_S",
+    "DEFAULT_QUEUE",
+    "FEED",
+    "MAX_SUBSCRIBERS",
+    "Event",
+    "EventBus",
+    "Subscription",
+]

@@ -12,7 +12,8 @@ its connection is in the middle of a request (one that is is never hung up)
 and the server reports the first such eviction once.
 
 ``ModbusServer.tap(bus, endpoint)`` publishes every frame in and out on the
-plant's event bus (fieldtwin.runtime.wiretap); a pump checks ``bus.active``
+plant's event bus (fieldtwin.runtime.wiretap): on the simulation's thread one raw
+record per chunk, decoded on the observers' side; a pump checks ``bus.watched``
 first, so an unobserved server pays one attribute read per chunk.
 """
 
@@ -85,7 +86,7 @@ class _Pump:
 
     def _observed(self) -> Stream | None:
         server = self._server
-        if server is None or server.wiretap is None or not server.wiretap.bus.active:
+        if server is None or server.wiretap is None or not server.wiretap.bus.watched:
             return None
         if self._stream is None:
             self._stream = server.wiretap.stream(_conn_name(self.transport))
@@ -94,7 +95,7 @@ class _Pump:
     def on_data(self, data: bytes, now: int) -> None:
         stream = self._observed()
         if stream is not None:
-            stream.inbound(data, now)  # before the core: the TES's state as the request meets it
+            stream.seen_in(data, now)  # before the core: the TES's state as the request meets it
         self.core.receive(data, now)
         self._flush(now)
 
@@ -125,11 +126,11 @@ class _Pump:
         stream = self._observed()
         try:
             if stream is not None:
-                stream.poll(now)
+                stream.seen_poll(now)
             for transmission in self.core.poll(now):
                 self.transport.send(transmission.data)
                 if stream is not None:
-                    stream.outbound(transmission.data, now)
+                    stream.seen_out(transmission.data, now)
         except TransportError:
             self.close()
             return

@@ -14,6 +14,7 @@ Errors: as the trace writer (reported once, the capture stops, the plant runs).
 from __future__ import annotations
 
 import ipaddress
+import struct
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -70,7 +71,47 @@ def tcp_packet(
     data: bytes,
     to_server: bool = True,
 ) -> bytes:
-    """One Ethernet/IPv4/TCP frame (lengths and checksums computed by dpkt)."""
+    """One Ethernet/IPv4/TCP frame, lengths and checksums computed: the bytes dpkt
+    builds (``dpkt_packet``; a test compares them), made with struct at a tenth of
+    the cost (the pcap writer builds one per frame)."""
+    macs = CLIENT_MAC + SERVER_MAC if to_server else SERVER_MAC + CLIENT_MAC
+    length = 20 + 20 + len(data)
+    ip = _IP.pack(0x45, 0, length, 0, 0, 64, 6, 0, src[0], dst[0])
+    ip = ip[:10] + _checksum(ip).to_bytes(2, "big") + ip[12:]
+    tcp = _TCP.pack(src[1], dst[1], seq, ack, 0x50, flags, WINDOW, 0, 0)
+    pseudo = src[0] + dst[0] + _PSEUDO.pack(6, 20 + len(data))
+    tcp_sum = _checksum(pseudo + tcp + data)
+    tcp = tcp[:16] + tcp_sum.to_bytes(2, "big") + tcp[18:]
+    # dst MAC, src MAC: from the client to the server, or back
+    ether = macs[6:] + macs[:6] + b"\x08\x00"
+    return ether + ip + tcp + data
+
+
+_IP = struct.Struct(">BBHHHBBH4s4s")
+_TCP = struct.Struct(">HHIIBBHHH")
+_PSEUDO = struct.Struct(">xBH")
+
+
+def _checksum(data: bytes) -> int:
+    """The Internet checksum (RFC 1071) of ``data``."""
+    if len(data) % 2:
+        data += b"\x00"
+    total: int = sum(struct.unpack(f">{len(data) // 2}H", data))
+    while total >> 16:
+        total = (total & 0xFFFF) + (total >> 16)
+    return ~total & 0xFFFF
+
+
+def dpkt_packet(
+    src: tuple[bytes, int],
+    dst: tuple[bytes, int],
+    seq: int,
+    ack: int,
+    flags: int,
+    data: bytes,
+    to_server: bool = True,
+) -> bytes:
+    """The same frame built by dpkt (the reference ``tcp_packet`` is checked against)."""
     segment = dpkt.tcp.TCP(
         sport=src[1], dport=dst[1], seq=seq, ack=ack, flags=flags, win=WINDOW, data=data
     )

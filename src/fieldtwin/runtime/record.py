@@ -35,12 +35,21 @@ so a replay that binds the same plant names them the same, whatever ports and
 pty paths the recording got.  Objects and LEDs are looked at (peeked, never
 read) every ``sample_ms`` of simulated time by a clock event of the recorder's
 own, which both the recording and its replay have.
+
+The simulation's thread only appends each record, raw (the bytes as bytes), to the
+writer's bounded queue (``QUEUE`` records); the writer's thread turns them into JSON
+(bytes into hex), compresses and writes them, in order.  A recording is an input log
+and stays complete: when its writer falls behind and the queue is full, the plant
+waits for it (the time waited is told when the recording closes; docs/record.md).
 """
 
 from __future__ import annotations
 
 import gzip
 import json
+import threading
+import time
+from collections import deque
 from collections.abc import Callable, Collection, Generator, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -51,7 +60,7 @@ from fieldtwin.clock import MS, Handle, SimClock
 from fieldtwin.devices.face import Device, peeker
 from fieldtwin.devices.module import ModuleDevice, PlcObjects
 from fieldtwin.errors import ConfigError, FieldtwinError
-from fieldtwin.runtime.events import Event, EventBus, Subscription
+from fieldtwin.runtime.events import Event, EventBus
 from fieldtwin.runtime.recfile import (
     FORMAT,
     INPUT_KINDS,
@@ -74,6 +83,9 @@ INPUTS = INPUT_KINDS
 OUTPUTS = OUTPUT_KINDS
 
 ORIGINAL_SEND = "_fieldtwin_unrecorded_send"  # where a recorded transport keeps its send
+QUEUE = 50_000  # records handed to the writer and not yet written: past it the plant waits
+WRITE_BATCH = 2000  # records the writer's thread turns into one compressed write
+WRITE_S = 0.01  # the writer's thread takes what was queued this often
 
 
 @dataclass(frozen=True, slots=True)
@@ -137,7 +149,8 @@ class Keys:
 
 
 class RecordWriter:
-    """A gzip file of JSON lines: the header, then the records."""
+    """A gzip file of JSON lines: the header, then the records, written by a thread of
+    its own from a bounded queue (``add`` waits when the queue is full)."""
 
     def __init__(self, path: str | Path, header: Header) -> None:
         self.path = Path(path)
@@ -153,26 +166,80 @@ class RecordWriter:
         except OSError as exc:
             raise ConfigError(f"--record {path}: cannot write ({exc.strerror})") from None
         self.records = 0
-        self._write(header.as_json())
-
-    def _write(self, item: object) -> None:
-        assert self._file is not None
-        self._file.write(_line(item))
+        self.waited_s = 0.0  # how long the plant waited for the writer (a full queue)
+        self.waits = 0
+        self.failed: BaseException | None = None  # what stopped the writer's thread
+        self._file.write(_line(header.as_json()))
+        self._queue: deque[Record] = deque()
+        self._room = threading.Condition()
+        self._ending = False
+        self._thread: threading.Thread | None = threading.Thread(
+            target=self._write_all, name="fieldtwin-record", daemon=True
+        )
+        self._thread.start()
 
     def add(self, record: Record) -> None:
-        if self._file is not None:
-            self._write(record)
-            self.records += 1
+        """Hand one record to the writer (the simulation's thread): waits while the
+        writer is ``QUEUE`` records behind."""
+        if self._thread is None:
+            return
+        if self.failed is not None:
+            raise self.failed
+        pending = self._queue
+        if len(pending) >= QUEUE:
+            started = time.perf_counter()
+            with self._room:
+                while len(pending) >= QUEUE and self.failed is None:
+                    self._room.wait(WRITE_S)
+            self.waited_s += time.perf_counter() - started
+            self.waits += 1
+        self.records += 1
+        pending.append(record)
+
+    def _write_all(self) -> None:
+        file, pending = self._file, self._queue
+        assert file is not None
+        while True:
+            ending = self._ending
+            if not ending:
+                time.sleep(WRITE_S)  # a batch gathers: no wake-up per record
+            while pending:
+                count = min(WRITE_BATCH, len(pending))
+                batch = [pending.popleft() for _ in range(count)]
+                if self.failed is None:
+                    try:
+                        file.write(b"".join(_line(record) for record in batch))
+                    except (OSError, ValueError) as exc:
+                        self.failed = exc  # told on the next add() or on close()
+                with self._room:
+                    self._room.notify_all()
+            if ending:
+                return
 
     def close(self) -> None:
+        """Write what is queued, then close the file (idempotent)."""
+        thread, self._thread = self._thread, None
+        if thread is not None:
+            self._ending = True
+            thread.join()
         if self._file is not None:
             file, self._file = self._file, None
             file.close()
+        if self.failed is not None:
+            failed, self.failed = self.failed, None
+            raise failed
 
 
 def _line(item: object) -> bytes:
-    text = json.dumps(item, separators=(",", ":"), ensure_ascii=False, default=str)
+    text = json.dumps(item, separators=(",", ":"), ensure_ascii=False, default=_plain)
     return text.encode("utf-8") + b"\n"
+
+
+def _plain(value: object) -> object:
+    """Bytes as hex (the simulation's thread hands them raw), anything else as text."""
+    if isinstance(value, bytes | bytearray | memoryview):
+        return bytes(value).hex()
+    return str(value)
 
 
 def read_recording(path: str | Path) -> tuple[Header, list[Record]]:
@@ -266,6 +333,7 @@ def _bind(peek: Callable[[Any], int], name: object) -> Callable[[], object]:
 
 
 def chars_record(event: Event) -> Record:
+    """The record of an SCM block or a DEM message published on the bus."""
     data = event.data
     if event.kind == "dem":  # a message a DEM logged (runtime.binder's logbook tap)
         what = [data["channel"], data["state"]] if data["type"] == "change" else [data["words"]]
@@ -274,23 +342,21 @@ def chars_record(event: Event) -> Record:
 
 
 class CharsFeed:
-    """SCM character blocks and DEM messages published on the plant's bus, as records
-    (on the simulation's thread)."""
+    """SCM character blocks and DEM messages published on the plant's bus, as records,
+    on the simulation's thread as they are published (``bus.listen``): in order with
+    the bytes and commands recorded around them."""
 
     def __init__(self, bus: EventBus, emit: Callable[[Record], None]) -> None:
         self._emit = emit
-        self._sub: Subscription | None = bus.subscribe(kinds=("serial", "dem"), notify=self._take)
+        self._stop: Callable[[], None] | None = bus.listen(("serial", "dem"), self._heard)
 
-    def _take(self) -> None:
-        if self._sub is not None:
-            for event in self._sub.take():
-                self._emit(chars_record(event))
+    def _heard(self, t_us: int, kind: str, device: str, data: Mapping[str, object]) -> None:
+        self._emit(chars_record(Event(t_us, kind, device, data)))
 
     def close(self) -> None:
-        if self._sub is not None:
-            self._take()
-            self._sub.close()
-            self._sub = None
+        if self._stop is not None:
+            self._stop()
+            self._stop = None
 
 
 # ------------------------------------------------------------------------- the recorder
@@ -339,14 +405,14 @@ class Recorder:
         send: Callable[[bytes], None] = getattr(transport, ORIGINAL_SEND, transport.send)
 
         def sending(data: bytes) -> None:
-            self.writer.add(["send", self.clock.now, key, bytes(data).hex()])
+            self.writer.add(["send", self.clock.now, key, bytes(data)])  # hex: the writer's
             send(data)
 
         setattr(transport, ORIGINAL_SEND, send)
         setattr(transport, "send", sending)  # noqa: B010
 
         def arrived(data: bytes, now: int) -> None:
-            self._input("data", key, data.hex())
+            self._input("data", key, bytes(data))  # hex: the writer's thread
             on_data(data, now)
 
         def closed(now: int) -> None:
@@ -413,6 +479,17 @@ class Recorder:
         self._sampler.close()
         self.writer.add(["end", self.clock.now, self.clock.fired])
         self.writer.close()
+
+    @property
+    def waited(self) -> str | None:
+        """What the plant waited for the writer, in words (None: it never did)."""
+        writer = self.writer
+        if not writer.waits:
+            return None
+        return (
+            f"recording {writer.path}: the plant waited {writer.waited_s:.3f} s for its"
+            f" writer ({writer.waits} times {QUEUE} records behind)"
+        )
 
 
 def plain_json(value: object) -> object:

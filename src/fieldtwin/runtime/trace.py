@@ -26,6 +26,7 @@ BUFFER = 64 * 1024  # bytes the file buffers before it writes (and on close)
 QUEUE = 10_000  # events the subscription holds (the writer drains it on every event)
 
 Report = Callable[[str], None]
+_ENCODE = json.JSONEncoder(separators=(",", ":")).encode  # as json.dumps(..., separators)
 
 
 def record(event: Event, wall: float) -> dict[str, object]:
@@ -74,7 +75,7 @@ class TraceWriter:
         wall = self._wall()
         try:
             for event in sub.take():
-                out.write(json.dumps(record(event, wall), separators=(",", ":")) + "\n")
+                out.write(_ENCODE(record(event, wall)) + "\n")
                 self.written += 1
         except (OSError, ValueError) as exc:  # a full disk; a file closed under us
             self._fail(f"trace {self.path}: {getattr(exc, 'strerror', None) or exc}")

@@ -1,12 +1,17 @@
 """What goes over the wire, decoded and published on the plant's event bus.
 
-A ``Wiretap`` belongs to one Modbus server; the server's pump hands it every
-chunk that arrived and every transmission it sent, *before* the core sees the
-chunk (so that the state of each TES, powered or given a fault, is the one the
-request meets).  It decodes on its own copy of the framing (an MBAP decoder per
-TCP connection, an RTU framer with the core's own timing per RTU stream), so it
-never changes what the core does.  The pump asks ``bus.active`` first: an
-unobserved plant pays one attribute read per chunk.
+A ``Wiretap`` belongs to one Modbus server; the server's pump hands its ``Stream``
+every chunk that arrived and every transmission it sent, *before* the core sees the
+chunk.  On the simulation's thread that is all (``Stream.seen_in``/``seen_out``/
+``seen_poll``): one raw record on the bus's buffer - the bytes, the simulated time
+and, for a request, the small tuple of each TES's state the request meets (powered,
+told not to answer, a line fault pending, its answer delay: ``Wiretap.states``).
+Framing, decoding and building the events happen on the observers' side
+(``Stream.inbound``/``outbound``/``poll``, fieldtwin.runtime.events), on the
+wiretap's own copy of the framing (an MBAP decoder per TCP connection, an RTU
+framer with the core's own timing per RTU stream), so it never changes what the
+core does.  The pump asks ``bus.watched`` first: an unobserved plant pays one
+attribute read per chunk.
 
 ``CharTap`` publishes the characters of an SCM channel in and out, one event
 per block the line delivered.
@@ -15,6 +20,7 @@ per block the line delivered.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from functools import lru_cache
 
 from fieldtwin.clock import MS, SimClock
 from fieldtwin.devices.chars import KIND_SERIAL, CharBlocks
@@ -126,22 +132,48 @@ def device_name(device: SlaveDevice) -> str:
     return str(getattr(device, "name", f"slave {device.slave}"))
 
 
-def outcome(device: SlaveDevice, link: Link, rtu: bool) -> str:
-    """What ``device`` will do with a request addressed to it, read from its state now."""
-    if not getattr(device, "powered", True):
-        return POWERED_OFF
+# What a request meets in one TES: (powered, told not to answer, the line fault an RTU
+# line will give this frame, the answer delay in us); None: powered, no fault, no delay.
+State = tuple[bool, bool, str | None, int] | None
+
+
+def state(device: SlaveDevice, link: Link, rtu: bool) -> State:
+    """The small tuple of ``device``'s state a request meets now (see ``State``)."""
+    powered = getattr(device, "powered", True)
     faults = getattr(device, "line_faults", None)
-    if faults is not None and faults.no_answer:
-        return NO_ANSWER
+    no_answer = faults is not None and faults.no_answer
+    pending = None
     if rtu and faults is not None:
-        pending = faults.pending(link)  # the RTU line will corrupt this frame
-        if pending is not None:
-            return str(pending.value)
+        fault = faults.pending(link)  # the RTU line will corrupt this frame
+        if fault is not None:
+            pending = str(fault.value)
+    delay = device.answer_delay(link)
+    if powered and not no_answer and pending is None and not delay:
+        return None
+    return (powered, no_answer, pending, delay)
+
+
+def outcome_of(meets: State) -> str:
+    """What a TES in state ``meets`` does with a request addressed to it."""
+    if meets is None:
+        return ANSWERS
+    powered, no_answer, pending, _ = meets
+    if not powered:
+        return POWERED_OFF
+    if no_answer:
+        return NO_ANSWER
+    if pending is not None:
+        return pending
     return ANSWERS
 
 
-def _late_ms(device: SlaveDevice, link: Link) -> float:
-    return device.answer_delay(link) / MS
+def outcome(device: SlaveDevice, link: Link, rtu: bool) -> str:
+    """What ``device`` will do with a request addressed to it, read from its state now."""
+    return outcome_of(state(device, link, rtu))
+
+
+def _late_ms(meets: State) -> float:
+    return (meets[3] if meets is not None else 0) / MS
 
 
 class Stream:
@@ -152,18 +184,37 @@ class Stream:
         self.conn = conn
         self._mbap = MbapDecoder()
         self._framer = RtuFramer(tap.timing, request_length) if tap.timing is not None else None
-        self._pending: dict[int, dict[str, object]] = {}  # transaction or slave -> request
+        # transaction or slave -> (address, count, the PDU of a write) of its request
+        self._pending: dict[int, tuple[object, object, bytes | None]] = {}
+        self.rtu = self._framer is not None
+        self._states: tuple[State, ...] | None = None  # what the record being decoded met
 
-    # -- the pump's calls ------------------------------------------------------------
+    # -- the pump's calls (the simulation's thread): one raw record each -------------
 
-    def inbound(self, data: bytes, now: int) -> None:
+    def seen_in(self, data: bytes, now: int) -> None:
+        """A chunk arrived (before the core sees it: the TES states it meets are now's)."""
+        self.tap.bus.post((self.inbound, bytes(data), now, self.tap.states(self.rtu)))
+
+    def seen_poll(self, now: int) -> None:
+        """The core was polled (an RTU line: a frame may end by silence now)."""
+        if self.rtu:
+            self.tap.bus.post((self.poll, now, self.tap.states(True)))
+
+    def seen_out(self, data: bytes, now: int) -> None:
+        self.tap.bus.post((self.outbound, bytes(data), now))
+
+    # -- the observers' side: framing, decoding, events --------------------------------
+
+    def inbound(self, data: bytes, now: int, states: tuple[State, ...] | None = None) -> None:
+        self._states = states
         if self._framer is None:
             self._tcp_in(data, now)
         else:
             self._rtu_events(self._framer.receive(data, now), now)
 
-    def poll(self, now: int) -> None:
+    def poll(self, now: int, states: tuple[State, ...] | None = None) -> None:
         if self._framer is not None:
+            self._states = states
             self._rtu_events(self._framer.poll(now), now)
 
     def outbound(self, data: bytes, now: int) -> None:
@@ -181,11 +232,16 @@ class Stream:
             self._mbap = MbapDecoder()
             self._publish(now, IN, None, {"error": str(exc), "hex": data[:260].hex()})
             return
+        whole = len(frames) == 1 and len(data) == 7 + len(frames[0].pdu)  # the usual chunk
         for frame in frames:
-            raw = _mbap_bytes(frame.transaction, frame.protocol, frame.unit, frame.pdu)
+            raw = (
+                data
+                if whole
+                else _mbap_bytes(frame.transaction, frame.protocol, frame.unit, frame.pdu)
+            )
             fields: dict[str, object] = {"transaction": frame.transaction, "hex": raw.hex()}
-            fields.update(request_fields(frame.pdu))
-            fields["tes"] = self.tap.outcomes(frame.unit, frame.pdu, rtu=False)
+            fields.update(_request_items(frame.pdu))
+            fields["tes"] = self.tap.outcomes(frame.unit, frame.pdu, False, self._states)
             self._remember(frame.transaction, frame.unit, fields, frame.pdu)
             self._publish(now, IN, frame.unit, fields)
 
@@ -194,7 +250,7 @@ class Stream:
             return
         transaction, unit, pdu = (data[0] << 8) | data[1], data[6], data[7:]
         fields: dict[str, object] = {"transaction": transaction, "hex": data.hex()}
-        write = self._pending.get(transaction, {}).get("_pdu")
+        write = self._pending.get(transaction, _NOTHING)[2]
         fields.update(self._reply(transaction, unit, pdu))
         self._publish(now, OUT, unit, fields)
         self._register(now, unit, write, pdu)
@@ -213,8 +269,8 @@ class Stream:
                 continue
             slave, pdu = event.slave, event.pdu
             fields = {"crc": "good", "hex": event.data.hex()}
-            fields.update(request_fields(pdu))
-            fields["tes"] = self.tap.outcomes(slave, pdu, rtu=True)
+            fields.update(_request_items(pdu))
+            fields["tes"] = self.tap.outcomes(slave, pdu, True, self._states)
             self._remember(slave, slave, fields, pdu)
             self._publish(event.at, IN, slave, fields)
             if slave == BROADCAST:  # executed by every TES that heard it, never answered
@@ -225,7 +281,7 @@ class Stream:
             return
         slave = data[0]
         fields: dict[str, object] = {"crc": "good" if crc_ok(data) else "bad", "hex": data.hex()}
-        write = self._pending.get(slave, {}).get("_pdu")
+        write = self._pending.get(slave, _NOTHING)[2]
         fields.update(self._reply(slave, slave, data[1:-2]))
         self._publish(now, OUT, slave, fields)
         self._register(now, slave, write, data[1:-2])
@@ -235,17 +291,16 @@ class Stream:
     def _remember(self, key: int, unit: int, fields: dict[str, object], pdu: bytes) -> None:
         if len(self._pending) >= MAX_PENDING:
             self._pending.pop(next(iter(self._pending)))
-        self._pending[key] = {"unit": unit, **fields}
-        if pdu and pdu[0] in WRITE_FUNCTIONS:
-            self._pending[key]["_pdu"] = pdu
+        write = pdu if pdu and pdu[0] in WRITE_FUNCTIONS else None
+        self._pending[key] = (fields.get("address"), fields.get("count"), write)
 
     def _register(self, now: int, unit: int, request: object, reply: bytes) -> None:
         """A write the TES answered without an exception: a ``register`` event."""
         if not isinstance(request, bytes) or not reply or reply[0] & EXCEPTION_FLAG:
             return
-        device = self.tap.slaves.get(unit)
-        if device is not None:
-            self._wrote(now, unit, device_name(device), request)
+        name = self.tap.names.get(unit)
+        if name is not None:
+            self._wrote(now, unit, name, request)
 
     def _broadcast(self, now: int, pdu: bytes, fields: dict[str, object]) -> None:
         outcomes = fields.get("tes")
@@ -270,23 +325,33 @@ class Stream:
             "address": address,
             "values": values,
         }
-        self.tap.bus.publish(now, KIND_REGISTER, f"{self.tap.endpoint} {unit}", data)
+        self.tap.bus.deliver(now, KIND_REGISTER, f"{self.tap.endpoint} {unit}", data)
 
     def _reply(self, key: int, unit: int, pdu: bytes) -> dict[str, object]:
         fields = reply_fields(pdu)
         request = self._pending.pop(key, None)
         if request is not None:
-            for name in ("address", "count"):
-                if name in request:
-                    fields[name] = request[name]
-        device = self.tap.slaves.get(unit)
-        fields["from"] = device_name(device) if device is not None else "server"
+            address, count, _ = request
+            if address is not None:
+                fields["address"] = address
+            if count is not None:
+                fields["count"] = count
+        fields["from"] = self.tap.names.get(unit, "server")
         return fields
 
     def _publish(
         self, t_us: int, direction: str, slave: int | None, fields: dict[str, object]
     ) -> None:
         self.tap.publish(t_us, direction, slave, self.conn, fields)
+
+
+_NOTHING: tuple[object, object, bytes | None] = (None, None, None)
+
+
+@lru_cache(maxsize=4096)
+def _request_items(pdu: bytes) -> tuple[tuple[str, object], ...]:
+    """``request_fields`` of a PDU, remembered (a master polls the same requests)."""
+    return tuple(request_fields(pdu).items())
 
 
 def _mbap_bytes(transaction: int, protocol: int, unit: int, pdu: bytes) -> bytes:
@@ -312,29 +377,54 @@ class Wiretap:
         self.transport = transport  # "tcp", "rtu+tcp", "rtu"
         self.slaves = slaves
         self.timing = timing  # None: MBAP framing
+        self.names = {slaves.number_of(d): device_name(d) for d in slaves.devices}
+        self._numbered = tuple((d, slaves.number_of(d), device_name(d)) for d in slaves.devices)
+        self._outcomes: dict[tuple[object, ...], dict[str, str]] = {}  # remembered, bounded
 
     def stream(self, conn: str) -> Stream:
         return Stream(self, conn)
 
-    def outcomes(self, unit: int, pdu: bytes, rtu: bool) -> dict[str, str]:
-        """What each TES behind this server does with the request, by TES name."""
+    def states(self, rtu: bool) -> tuple[State, ...]:
+        """Each TES's state now, in ``slaves.devices`` order (the simulation's thread)."""
         link = self.slaves.link
+        return tuple(state(device, link, rtu) for device in self.slaves.devices)
+
+    def outcomes(
+        self, unit: int, pdu: bytes, rtu: bool, states: tuple[State, ...] | None = None
+    ) -> dict[str, str]:
+        """What each TES behind this server does with the request, by TES name, from
+        ``states`` (what the request met; read now when not given)."""
+        if states is None:
+            states = self.states(rtu)
+        writes = bool(pdu) and pdu[0] in WRITE_FUNCTIONS
+        key = (unit, writes, rtu, states)
+        known = self._outcomes.get(key)
+        if known is not None:
+            return dict(known)
+        out = self._outcomes_of(unit, writes, rtu, states)
+        if len(self._outcomes) >= MAX_PENDING:
+            self._outcomes.clear()
+        self._outcomes[key] = out
+        return dict(out)
+
+    def _outcomes_of(
+        self, unit: int, writes: bool, rtu: bool, states: tuple[State, ...]
+    ) -> dict[str, str]:
         out: dict[str, str] = {}
-        for device in self.slaves.devices:
-            number = self.slaves.number_of(device)
+        single = len(self._numbered) == 1
+        for (_, number, name), meets in zip(self._numbered, states, strict=True):
             if unit == BROADCAST:
-                state = outcome(device, link, rtu)
-                writes = bool(pdu) and pdu[0] in WRITE_FUNCTIONS
-                if state == ANSWERS:
-                    state = BROADCAST_EXECUTED if writes else BROADCAST_IGNORED
-                out[device_name(device)] = state
-            elif number == unit or (not rtu and unit == 0xFF and len(self.slaves.devices) == 1):
-                state = outcome(device, link, rtu)
-                if state == ANSWERS and device.answer_delay(link):
-                    state = f"{ANSWERS} after {_late_ms(device, link):g} ms"
-                out[device_name(device)] = state
+                result = outcome_of(meets)
+                if result == ANSWERS:
+                    result = BROADCAST_EXECUTED if writes else BROADCAST_IGNORED
+                out[name] = result
+            elif number == unit or (not rtu and unit == 0xFF and single):
+                result = outcome_of(meets)
+                if result == ANSWERS and meets is not None and meets[3]:
+                    result = f"{ANSWERS} after {_late_ms(meets):g} ms"
+                out[name] = result
             else:
-                out[device_name(device)] = NOT_ADDRESSED
+                out[name] = NOT_ADDRESSED
         return out
 
     def publish(
@@ -351,7 +441,7 @@ class Wiretap:
         }
         known = slave is not None and self.slaves.get(slave) is not None
         device = f"{self.endpoint} {slave}" if known else self.endpoint
-        self.bus.publish(t_us, KIND_MODBUS, device, data)
+        self.bus.deliver(t_us, KIND_MODBUS, device, data)
 
 
 class CharTap(CharBlocks):
@@ -379,6 +469,8 @@ __all__ = [
     "Wiretap",
     "function_name",
     "outcome",
+    "outcome_of",
     "reply_fields",
     "request_fields",
+    "state",
 ]

@@ -648,13 +648,16 @@ function connectEvents(delay = 1000) {
   url.protocol = location.protocol === "https:" ? "wss:" : "ws:";
   url.searchParams.set("kind", "modbus,serial,led,clock");
   url.searchParams.set("queue", "2000");
+  url.searchParams.set("batch", "1"); // each message an array of events, in order
   if (TOKEN) url.searchParams.set("token", TOKEN);
   const ws = new WebSocket(url);
   ws.onmessage = (message) => {
-    const e = JSON.parse(message.data);
-    stats.events += 1;
-    if (e.kind === "serial") lastSerial.set(`${e.device} ${e.channel} ${e.dir}`, e.text);
-    traffic.events.push(e);
+    const batch = JSON.parse(message.data);
+    for (const e of Array.isArray(batch) ? batch : [batch]) {
+      stats.events += 1;
+      if (e.kind === "serial") lastSerial.set(`${e.device} ${e.channel} ${e.dir}`, e.text);
+      traffic.events.push(e);
+    }
     if (traffic.events.length > TRAFFIC_KEPT) traffic.events.splice(0, traffic.events.length - TRAFFIC_KEPT);
     traffic.dirty = true;
   };
