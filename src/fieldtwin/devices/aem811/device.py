@@ -12,7 +12,7 @@ from functools import partial
 from pathlib import Path
 
 from fieldtwin.devices.aem811.plantkeys import read_plant_table
-from fieldtwin.devices.aem811.status import details
+from fieldtwin.devices.aem811.status import channel_flags, details, threshold_bits
 from fieldtwin.devices.aem811.values import set_value
 from fieldtwin.devices.common import apply_faults, apply_inputs
 from fieldtwin.devices.context import BuildContext
@@ -58,17 +58,8 @@ class Aem811Device(ModuleDevice):
         for ch, cfg in enumerate(aem.config.channels):
             enabled = bool(aem.enabled >> ch & 1)
             m = aem.measurements[ch]
-            flags = tuple(
-                name
-                for name, on in (
-                    ("ELL", m and m.below),
-                    ("continuity", m and m.continuity),
-                    ("overflow", m and m.overflow),
-                    ("EHL", m and m.above),
-                )
-                if on
-            )
-            bits = "".join(str(aem.thresholds.bits >> (ch + 8 * lv) & 1) for lv in (0, 1))
+            flags = channel_flags(m)
+            bits = threshold_bits(aem, ch)
             more: tuple[tuple[str, str | bool], ...] = (
                 ("range", cfg.range.name),
                 ("sqrt", cfg.sqrt),

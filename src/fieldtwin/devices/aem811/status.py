@@ -36,6 +36,19 @@ class Aem811(Protocol):
 _SCALING = {Scaling.INPUT_RANGE: "input range", Scaling.STANDARD: "standard", Scaling.USER: "user"}
 
 
+def channel_flags(m: Measurement | None) -> tuple[str, ...]:
+    """A channel's fault flags in the order the console shows them (AEM 4.2, 5.1)."""
+    if m is None:
+        return ()
+    found = (("ELL", m.below), ("continuity", m.continuity), ("overflow", m.overflow))
+    return tuple(name for name, on in (*found, ("EHL", m.above)) if on)
+
+
+def threshold_bits(mod: Aem811, channel: int) -> str:
+    """A channel's two threshold bits, level 0 then level 1 ("01")."""
+    return "".join(str(mod.thresholds.bits >> (channel + 8 * lv) & 1) for lv in (0, 1))
+
+
 def details(mod: Aem811) -> dict[str, str]:
     config = mod.config
     lines = {
@@ -56,17 +69,8 @@ def details(mod: Aem811) -> dict[str, str]:
         text += ", sqrt" * cfg.sqrt + ", continuity test" * cfg.continuity
         state = "inhibited" if not enabled >> channel & 1 else f"= {mod.values[channel]}"
         m = mod.measurements[channel]
-        faults = [
-            name
-            for name, on in (
-                ("ELL", m and m.below),
-                ("continuity", m and m.continuity),
-                ("overflow", m and m.overflow),
-                ("EHL", m and m.above),
-            )
-            if on
-        ]
-        thresholds = "".join(str(mod.thresholds.bits >> (channel + 8 * lv) & 1) for lv in (0, 1))
+        faults = channel_flags(m)
+        thresholds = threshold_bits(mod, channel)
         text += f"; {state}; thresholds {mod.thresholds.values[0][channel]}/"
         text += f"{mod.thresholds.values[1][channel]} bits {thresholds}"
         if faults:
