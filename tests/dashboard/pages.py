@@ -19,14 +19,29 @@ def sim_time(page: Any) -> float:
     return float(page.evaluate("window.__fieldtwin.state.clock.t_s"))
 
 
+def clock_now(page: Any) -> float:
+    """The plant's simulated time now, asked of the API (the page's own copy is up to one
+    snapshot old)."""
+    return float(page.evaluate("fetch('/clock').then((r) => r.json()).then((c) => c.t_s)"))
+
+
 def wait_sim(page: Any, predicate: str, bound_s: float, speed: float = 4.0) -> float:
     """Wait until the JS ``predicate`` holds, at most ``bound_s`` of simulated time;
-    returns the simulated seconds it took (the test asserts it is within the bound)."""
-    start = sim_time(page)
+    returns the simulated seconds it took (the test asserts it is within the bound).
+
+    The start is the plant's clock asked of the API; the end is the time of the snapshot
+    the page drew the change from, which comes at most one snapshot period (at the page's
+    rate and the plant's speed) after the change itself: that period is the page's
+    resolution and is allowed on top of the bound."""
+    start = clock_now(page)
     timeout = bound_s / speed * 1000 + WALL_MARGIN_MS
     page.wait_for_function(predicate, timeout=timeout)
     took = sim_time(page) - start
-    assert took <= bound_s, f"{predicate}: took {took:.1f} s of simulated time (bound {bound_s})"
+    resolution = speed / float(page.evaluate("window.__fieldtwin.rate"))
+    assert took <= bound_s + resolution, (
+        f"{predicate}: took {took:.1f} s of simulated time (bound {bound_s}"
+        f" + {resolution:.2f} s of the page's resolution)"
+    )
     return took
 
 

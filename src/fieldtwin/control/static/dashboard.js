@@ -18,7 +18,7 @@ const TRAFFIC_KEPT = 1000; // events kept for the traffic view (a ring)
 const TRAFFIC_SHOWN = 200; // rows drawn
 const LED_COLOURS = { OK: "green", ERR: "red", F: "red", Pwr: "green", Run: "green", Prm: "green", Wdg: "red" };
 
-const stats = { updates: 0, events: 0, errors: 0, lastError: "", state: null };
+const stats = { updates: 0, events: 0, errors: 0, lastError: "", state: null, rate: RATE };
 window.__fieldtwin = stats;
 
 // --- the API -------------------------------------------------------------------------
