@@ -91,6 +91,14 @@ class _Arrival:
 class FakeWall:
     """The runner's WallClock: ``wait`` jumps the fake time instead of sleeping."""
 
+    # the wall's abilities (fieldtwin.runtime.wall.WallClock): none by default; the
+    # tests of fast polls and of the lead set their own
+    fast_poll_s = 0.0
+    lead_s = 0.0
+
+    def want_precision(self, on: bool) -> None:
+        """A fake wall cannot wait more precisely than it does: the wish is ignored."""
+
     def __init__(self) -> None:
         self.now = START
         self.waits: list[float | None] = []

@@ -39,10 +39,10 @@ def test_the_runner_passes_the_wish_on_and_a_fake_wall_ignores_it() -> None:
     runner.want_precise_waits(False)
     assert not wall.precise
 
-    class Fake:  # a test wall without the ability
-        pass
+    from tests.runtime.fake_wall import FakeWall
 
-    Runner(SimClock(), speed=1.0, wall=Fake()).want_precise_waits(True)  # type: ignore[arg-type]
+    # a test wall without the ability: its typed want_precision ignores the wish
+    Runner(SimClock(), speed=1.0, wall=FakeWall()).want_precise_waits(True)
 
 
 def test_the_system_wall_leads_only_while_precise_waits_are_wanted() -> None:

@@ -16,7 +16,7 @@ from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from fieldtwin.clock import Handle
+from fieldtwin.clock import Handle, SimClock
 from fieldtwin.errors import ConfigError
 
 MIN_SPEED = 1e-3  # the slowest speed factor: 1 simulated second per 1000 wall seconds
@@ -29,6 +29,7 @@ CATCH_UP_SLICE_S = 0.05
 MAX_LAG_S = 0.5
 REACHED_WINDOW_S = 2.0  # the speed reached is measured over this much wall time
 REACHED_SAMPLE_S = 0.1  # one sample of (wall, simulated) time at most this often
+MODE_LAST = 1 << 30  # a mode's end runs after every other event of its instant
 
 
 def speed_range() -> str:
@@ -86,6 +87,53 @@ class SpeedMeter:
         return (s1 - s0) / 1_000_000 / (w1 - w0)
 
 
+class Tempo:
+    """The pace of every run in progress (outermost first; a command's run nests in the
+    run that took it), the speed reached, and whether the plant keeps its speed."""
+
+    def __init__(self, report: Callable[[str], None]) -> None:
+        self.meter = SpeedMeter()
+        self._report = report
+        self._paces: list[Pace] = []
+        self.lagged_at = float("-inf")  # wall time the pace was last moved (speed not kept)
+        self._lag_told = False
+
+    def begin(self, wall: float, sim: int, factor: float) -> Pace:
+        """A run starts at (wall, sim): its pace."""
+        pace = Pace(wall, sim, factor)
+        self._paces.append(pace)
+        return pace
+
+    def end(self) -> None:
+        """The innermost run has ended."""
+        self._paces.pop()
+
+    def repace(self, wall: float, sim: int, factor: float) -> None:
+        """Every run's pace starts again from (wall, sim): no jump in simulated time."""
+        for pace in self._paces:
+            pace.wall0, pace.sim0, pace.speed = wall, sim, factor
+
+    def lagging(self, wall: float) -> bool:
+        """The pace was moved less than REACHED_WINDOW_S ago (the speed is not kept)."""
+        return wall - self.lagged_at < REACHED_WINDOW_S
+
+    def kept(self, woke: float, sim: int, pace: Pace) -> bool:
+        """After a paced cycle: sample the speed; if the clock lags ``pace`` by more than
+        MAX_LAG_S, move every pace to (woke, sim), say so the first time, return False."""
+        self.meter.sample(woke, sim)
+        if woke - pace.wall_at(sim) <= MAX_LAG_S:
+            return True
+        self.repace(woke, sim, pace.speed)
+        self.lagged_at = woke
+        if not self._lag_told:
+            self._lag_told = True
+            self._report(
+                f"the plant cannot keep speed x{pace.speed:g}: it runs as fast as it can"
+                " (the speed reached is in GET /clock and the status line)"
+            )
+        return False
+
+
 @dataclass(slots=True)
 class Mode:
     """A run of simulated time the runner does between its cycles (issue 20 item 5):
@@ -98,15 +146,54 @@ class Mode:
     handle: Handle | None = None  # the clock event at ``until`` that ends it
 
 
+class Modes:
+    """The mode in progress, one at most (issue 20 item 5): started, ended by its clock
+    event (after the others of its instant) or cut; ``on_due()`` when it ends by itself."""
+
+    def __init__(self, clock: SimClock, on_due: Callable[[], None]) -> None:
+        self.clock = clock
+        self.current: Mode | None = None
+        self._on_due = on_due
+
+    def start(self, name: str, until: int, on_end: Callable[[int, bool], None] | None) -> Mode:
+        """The mode in progress, if any, is cut first."""
+        self.cut()
+        mode = Mode(name, until, on_end)
+        mode.handle = self.clock.schedule(until, lambda now: self._due(mode), MODE_LAST)
+        self.current = mode
+        return mode
+
+    def cut(self) -> None:
+        """End the mode in progress now (cut); nothing if none."""
+        mode = self.current
+        if mode is None:
+            return
+        self.current = None
+        if mode.handle is not None:
+            mode.handle.cancel()
+        if mode.on_end is not None:
+            mode.on_end(self.clock.now, True)
+
+    def _due(self, mode: Mode) -> None:
+        if self.current is mode:
+            self.current = None
+            self._on_due()
+            if mode.on_end is not None:
+                mode.on_end(self.clock.now, False)
+
+
 __all__ = [
     "CATCH_UP_SLICE_S",
     "MAX_LAG_S",
     "MAX_SPEED",
     "MIN_SPEED",
+    "MODE_LAST",
     "REACHED_WINDOW_S",
     "Mode",
+    "Modes",
     "Pace",
     "SpeedMeter",
+    "Tempo",
     "check_speed",
     "speed_range",
 ]

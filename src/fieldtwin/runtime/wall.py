@@ -39,7 +39,24 @@ FAST_POLL_S = 0.0001
 
 
 class WallClock(Protocol):
-    """Monotonic seconds, and a bounded wait for ready descriptors."""
+    """Monotonic seconds, a bounded wait for ready descriptors, and the wall's abilities
+    the runner's pacing uses (typed: a wall without one says 0 or ignores the wish)."""
+
+    @property
+    def fast_poll_s(self) -> float:
+        """At ``--speed max``, the least wall time between two polls of the descriptors
+        while events run (0: a poll between every two instants)."""
+        ...
+
+    @property
+    def lead_s(self) -> float:
+        """How early (wall seconds) the runner may run a due instant (0: on time)."""
+        ...
+
+    def want_precision(self, on: bool) -> None:
+        """A user needs waits that end on time to a fraction of a millisecond (``on``),
+        or no longer does (counted); a wall that cannot ignores it."""
+        ...
 
     def monotonic(self) -> float: ...
 
