@@ -45,6 +45,15 @@ def check_speed(speed: float | None, where: str = "speed") -> float | None:
     return float(speed)
 
 
+def check_not_past(t_us: int, now: int) -> None:
+    """A run until ``t_us`` is possible from ``now``; else a ConfigError (time never goes back)."""
+    if t_us < now:
+        raise ConfigError(
+            f"cannot run until t = {t_us / 1e6:g} s: simulated time is already"
+            f" {now / 1e6:.6f} s and never goes back"
+        )
+
+
 @dataclass(slots=True)
 class Pace:
     """The wall <-> simulated time mapping of one run: (wall0, sim0) at ``speed``."""
@@ -153,7 +162,7 @@ class Modes:
     def __init__(self, clock: SimClock, on_due: Callable[[], None]) -> None:
         self.clock = clock
         self.current: Mode | None = None
-        self._on_due = on_due
+        self._on_due = on_due  # told when a mode ends by itself
 
     def start(self, name: str, until: int, on_end: Callable[[int, bool], None] | None) -> Mode:
         """The mode in progress, if any, is cut first."""
@@ -194,6 +203,7 @@ __all__ = [
     "Pace",
     "SpeedMeter",
     "Tempo",
+    "check_not_past",
     "check_speed",
     "speed_range",
 ]

@@ -28,9 +28,10 @@ clock deadline, or the run's end when nothing is due before it):
   (``_between_polls``): commands, ticks and the end are taken up at the next poll,
   and a ``run_until`` predicate is still checked after every instant.
 
-The three share one ``Drive`` (settle the clock, clamp, wait on the wall) and see
-the run in progress through a ``Course``: is it done, when is the next tick, did
-the paced cycle keep its pace.  None of them touches the runner's other state.
+The three share one ``Drive``: it settles the clock, clamps, waits on the wall, and
+holds the run's ``Ticks`` and ``Tempo`` (fieldtwin.runtime.pace: the paces, the speed
+reached).  They see the run in progress only through a ``Course`` (is it done, is a
+predicate checked after every instant), never the runner's other state.
 """
 
 from __future__ import annotations
@@ -39,7 +40,7 @@ from collections.abc import Callable, Collection
 from typing import Protocol
 
 from fieldtwin.clock import SimClock
-from fieldtwin.runtime.pace import CATCH_UP_SLICE_S, Pace, SpeedMeter
+from fieldtwin.runtime.pace import CATCH_UP_SLICE_S, Pace, Tempo
 from fieldtwin.runtime.reactor import MAX_WAIT_S, Reactor
 from fieldtwin.runtime.wall import WallClock
 
@@ -54,10 +55,6 @@ class Course(Protocol):
 
     def done(self) -> bool:
         """A stop is asked or the run's predicate holds."""
-        ...
-
-    def kept(self, woke: float, pace: Pace) -> None:
-        """After a paced step: sample the speed, move the pace if the clock lags."""
         ...
 
 
@@ -112,7 +109,7 @@ class Drive:
         clock: SimClock,
         wall: WallClock,
         reactor: Reactor,
-        meter: SpeedMeter,
+        tempo: Tempo,
         course: Course,
         ticks: Ticks,
     ) -> None:
@@ -120,7 +117,8 @@ class Drive:
         self.ticks = ticks
         self.wall = wall
         self.reactor = reactor
-        self.meter = meter
+        self.tempo = tempo
+        self.meter = tempo.meter
         self.course = course
 
     def settle(self, until: int, slice_end: float | None = None) -> bool:
@@ -199,7 +197,8 @@ class Walled:
             if lead and woke + lead >= pace.wall_at(target):
                 reached = max(reached, drive.clamp(target, end))
             drive.settle(min(target, reached))  # one instant at most
-        drive.course.kept(woke, pace)
+        if not drive.tempo.kept(woke, drive.clock.now, pace):  # the pace moved
+            drive.ticks.lagged(drive.clock.now)  # the ticks come on the wall too
 
 
 class Fast:

@@ -89,6 +89,7 @@ class Reactor:
         self.report = report
         self.tap: AttachTap | None = None  # a recording: sees every attachment (set_tap)
         self.real = 0  # attached transports that are real (not memory)
+        self._pace_holders = 0  # servers of real lines that keep the run paced
         self._links: dict[int, _Link] = {}  # id(transport) -> link
         self._listeners: dict[int, _Accepting] = {}  # id(listener) -> entry
         self._by_fd: dict[int, _Link | _Accepting] = {}
@@ -107,8 +108,14 @@ class Reactor:
         return bool(self._links) or bool(self._listeners)
 
     @property
-    def listening(self) -> bool:
-        return bool(self._listeners)
+    def holds_pace(self) -> bool:
+        """A real transport, a listener or a pace holder is there: time follows the wall."""
+        return self.real > 0 or bool(self._listeners) or self._pace_holders > 0
+
+    def hold_pace(self, on: bool) -> None:
+        """A server of a real line (``on``) holds the pace while it is open (issue 15 item
+        2: a serial peer that closes does not end the pacing); counted."""
+        self._pace_holders = max(0, self._pace_holders + (1 if on else -1))
 
     @property
     def watched(self) -> int:

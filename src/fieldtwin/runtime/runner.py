@@ -1,34 +1,26 @@
-"""The real-time runner: runs the simulated clock, pumps transports into the cores,
-takes commands between instants.  It is in three parts (docs/architecture.md, "The
-runner in parts"): the descriptors (fieldtwin.runtime.reactor: attach, read, drain,
-close, accept with back-off); the pacing (fieldtwin.runtime.pacing: free, paced to
-the wall at ``speed``, or fast with ``speed=None``, chosen on every cycle from what
-is attached; ``advance`` with nothing attached is ``clock.advance``); and this
-module: the runs, the stop latch, pause and resume, the speed, modes and commands.
+"""The real-time runner: runs the simulated clock, pumps the transports into the cores,
+takes commands between instants.  In three parts (docs/architecture.md, "The runner
+in parts"): the descriptors (fieldtwin.runtime.reactor), the pacing chosen on every
+cycle from what is attached, free, paced to the wall or fast (fieldtwin.runtime.pacing),
+and this module: the runs, the stop latch, commands, pause, speed and modes.
 
-``run_forever``'s ticks are not clock events: they never keep the clock busy.  Every
-single wait is at most MAX_WAIT_S, so a ``stop()`` from another thread is seen
-within that time.  ``stop()`` is a latch only the run it ends consumes: asked before
-a run starts (or during start-up) it ends that run at once; nested runs see it and
-pass it on; the outermost run it ends takes it down; a run that ends otherwise (its
-end, its predicate) leaves it for the next.  Catch-up is bounded (fieldtwin.runtime.pace,
-issue 20): a paced cycle catches up CATCH_UP_SLICE_S of wall time at most, then
-serves commands, descriptors and the stop flag; once the clock lags its pace by more
-than MAX_LAG_S the pace is moved to where the clock stands (``speed_reached`` says
-how fast the plant runs; reported once).
+``stop()`` is a latch only the run it ends consumes: asked before a run starts (or
+during start-up) it ends that run at once; nested runs (a command's ``advance``) see
+it and pass it on; the outermost run it ends takes it down; a run that ends otherwise
+(its end, its predicate) leaves it for the next.  Every single wait is at most
+MAX_WAIT_S, so a stop from another thread is seen within that time.
 
-Commands from other threads (the control API) come through an inbox
-(fieldtwin.runtime.inbox) given to ``take_commands``: its wakeup descriptor is
-watched with the transports, and its commands run on this thread at the start of a
-cycle, one at a time.  A command may run the clock itself (``advance``, a power
-break): such a nested run keeps pumping the transports, takes no other command
-until it ends, and passes a ``stop()`` on to the run around it.  ``pause``/``resume``
-hold simulated time (the transports are not read while paused; the inbox still is),
-``step`` and ``run_to`` run it by a given amount, paused or not, ``set_speed``
-changes the pace without a jump.  ``start_mode`` is their form that holds nothing:
-the outermost run goes on to the mode's end between its cycles, taking commands all
-along; the end is a clock event (the same in a replay), and a new mode or ``pause``
-replaces the one in progress.
+Commands from other threads come through an inbox (fieldtwin.runtime.inbox) given to
+``take_commands``: its wakeup descriptor is watched with the transports, its commands
+run on this thread at the start of a cycle, one at a time.  A command may run the
+clock itself: such a nested run keeps pumping the transports and takes no other
+command until it ends.  ``pause``/``resume`` hold simulated time (the transports are
+not read while paused; the inbox still is), ``step`` and ``run_to`` run it by an
+amount, paused or not, ``set_speed`` changes the pace without a jump.  ``start_mode``
+is their form that holds nothing: the outermost run goes on to the mode's end
+between its cycles, taking commands all along; its end is a clock event (the same in
+a replay); a new mode or ``pause`` cuts the one in progress.  Catch-up is bounded and
+a speed not kept is said (fieldtwin.runtime.pace, ``speed_reached``, ``lagging``).
 """
 
 from __future__ import annotations
@@ -38,10 +30,9 @@ from collections.abc import Callable
 from fieldtwin.clock import SimClock
 from fieldtwin.errors import ConfigError
 from fieldtwin.runtime.inbox import Inbox
-from fieldtwin.runtime.pace import Mode, Modes, Pace, Tempo, check_speed
+from fieldtwin.runtime.pace import Mode, Modes, Pace, Tempo, check_not_past, check_speed
 from fieldtwin.runtime.pacing import Drive, Fast, Free, Pacing, Ticks, Walled
 from fieldtwin.runtime.reactor import (
-    ACCEPT_BACKOFF_MAX_S,
     ACCEPT_BACKOFF_S,
     MAX_WAIT_S,
     OUTPUT_BOUND,
@@ -77,7 +68,7 @@ class Runner:
         self._tempo = Tempo(self.report)
         self._meter = self._tempo.meter
         self._ticks = Ticks()
-        drive = Drive(clock, self._wall, self._reactor, self._meter, self, self._ticks)
+        drive = Drive(clock, self._wall, self._reactor, self._tempo, self, self._ticks)
         self._free, self._walled, self._fast = Free(drive), Walled(drive), Fast(drive)
         self._predicate: Callable[[], bool] | None = None
         self._stopping = False
@@ -86,10 +77,7 @@ class Runner:
         self._paused = False
         self._stepping = 0  # nested runs of step/run_to: they run while paused
         self._depth = 0  # nested _run calls (a command that runs the clock)
-        self._pace_holders = 0  # servers of real lines that keep the run paced (hold_pace)
         self._modes = Modes(clock, self._mode_due)  # a step, run-until, power break
-
-    # ----------------------------------------------------------------- attachments
 
     def attach(
         self, transport: Transport, on_data: DataCallback, on_close: CloseCallback | None = None
@@ -111,36 +99,28 @@ class Runner:
         self._reactor.set_tap(tap)
 
     def detach(self, transport_or_listener: Transport | Listener) -> None:
-        """Stop pumping it (it stays open); unknown objects are ignored.  O(1) for a
-        descriptor, O(descriptor-less transports) for the others."""
+        """Stop pumping it (it stays open); unknown objects are ignored."""
         self._reactor.detach(transport_or_listener)
 
     def want_precise_waits(self, on: bool) -> None:
-        """A core whose deadlines must be met to a fraction of a millisecond on the wall
-        (``on``), or that no longer needs it (issue 15 item 2: wire-timed RTU replies);
-        a wall without the ability ignores it."""
+        """A core needs its deadlines met on the wall to a fraction of a ms (``on``: issue 15
+        item 2, wire-timed RTU replies), or no longer does; some walls cannot (no-op)."""
         self._wall.want_precision(on)
 
     def hold_pace(self, on: bool) -> None:
         """A server of a real line (``on``) keeps the run paced at ``speed`` while it is
         open, even once its transport has gone (a serial peer that closed)."""
-        self._pace_holders = max(0, self._pace_holders + (1 if on else -1))
+        self._reactor.hold_pace(on)
 
     @property
     def paced(self) -> bool:
-        """True while a real transport, a listener or a pace holder is there and speed
-        is a number."""
-        if self.speed is None:
-            return False
-        reactor = self._reactor
-        return reactor.real > 0 or reactor.listening or self._pace_holders > 0
+        """A real transport, a listener or a pace holder is there, and speed is a number."""
+        return self.speed is not None and self._reactor.holds_pace
 
     @property
     def watched(self) -> int:
         """Descriptors the runner is watching (links and listeners)."""
         return self._reactor.watched
-
-    # ----------------------------------------------------------------- commands, clock
 
     def take_commands(self, inbox: Inbox | None) -> None:
         """Run the commands of ``inbox`` between instants (None: take no more)."""
@@ -175,17 +155,13 @@ class Runner:
         """Let simulated time run again, from where it stood (no jump)."""
         if self._paused:
             self._paused = False
-            self._repace()
-            self._meter.reset()
+            self._repace(afresh=True)
 
     def set_speed(self, speed: float | None) -> None:
         """A new speed factor (None: as fast as possible), effective at once, no jump."""
         self.speed = check_speed(speed, "runner speed")
-        self._repace()
-        self._meter.reset()
+        self._repace(afresh=True)
         self._tempo.lagged_at = float("-inf")
-
-    # -- modes (issue 20 item 5): long runs that hold nothing
 
     @property
     def mode(self) -> Mode | None:
@@ -195,13 +171,11 @@ class Runner:
     def start_mode(
         self, name: str, until_us: int, on_end: Callable[[int, bool], None] | None = None
     ) -> Mode:
-        """Run simulated time to ``until_us`` (paused or not) between the runner's cycles;
-        ``on_end(now, cut)`` at its end, a clock event after the others of its instant.
-        The mode in progress, if any, ends first (cut)."""
-        self._check_not_past(until_us)
+        """Run simulated time to ``until_us`` between cycles, paused or not, cutting the mode
+        in progress; ``on_end(now, cut)`` at its end (a clock event after the others)."""
+        check_not_past(until_us, self.clock.now)
         mode = self._modes.start(name, until_us, on_end)
-        self._repace()  # from where the clock stands, paused or not
-        self._meter.reset()
+        self._repace(afresh=True)  # from where the clock stands, paused or not
         return mode
 
     def end_mode(self) -> None:
@@ -209,22 +183,12 @@ class Runner:
         self._modes.cut()
 
     def _mode_due(self) -> None:
-        if self._paused:
+        if self._paused:  # time holds from now on: the speed reached starts afresh
             self._meter.reset()
-
-    def _check_not_past(self, t_us: int) -> None:
-        if t_us < self.clock.now:
-            raise ConfigError(
-                f"cannot run until t = {t_us / 1e6:g} s: simulated time is already"
-                f" {self.clock.now / 1e6:.6f} s and never goes back"
-            )
-
-    # -- the speed reached (issue 20 item 1)
 
     @property
     def speed_reached(self) -> float | None:
-        """Simulated seconds per wall second over the last REACHED_WINDOW_S while time
-        runs (None while held or before two samples)."""
+        """Simulated s per wall s lately, while time runs (None: held, or not yet known)."""
         return None if self._holding() else self._meter.reached
 
     @property
@@ -232,18 +196,16 @@ class Runner:
         """True while the plant does not keep ``speed`` (the pace was moved lately)."""
         return self._tempo.lagging(self._wall.monotonic())
 
-    def _repace(self) -> None:
+    def _repace(self, afresh: bool = False) -> None:
+        """Every run's pace from where the clock stands; ``afresh``: the speed reached too."""
         self._tempo.repace(self._wall.monotonic(), self.clock.now, self.speed or 1.0)
+        if afresh:
+            self._meter.reset()
 
     def _holding(self) -> bool:
         """Paused, with an inbox to resume from, outside a step and a command's own run."""
-        return (
-            self._paused
-            and self._inbox is not None
-            and not self._stepping
-            and self._depth == 1
-            and self._modes.current is None
-        )
+        held = self._paused and self._inbox is not None and not self._stepping
+        return held and self._depth == 1 and self._modes.current is None
 
     def _hold(self) -> None:
         """Paused: no simulated time, no transport read; wait for a command (bounded)."""
@@ -252,8 +214,6 @@ class Runner:
         self._commands()
         if not self._paused:
             self._repace()
-
-    # ----------------------------------------------------------------- public runs
 
     def advance(self, duration_us: int) -> None:
         """Advance simulated time by ``duration_us`` (paced or not, see module docstring)."""
@@ -297,12 +257,11 @@ class Runner:
 
     def run_to(self, t_us: int) -> None:
         """Run simulated time until ``t_us`` (never back), paused or not."""
-        self._check_not_past(t_us)
+        check_not_past(t_us, self.clock.now)
         self.step(t_us - self.clock.now)
 
     def stop(self) -> None:
-        """End the current run (advance, run_until or run_forever) after the running
-        instant; asked before a run starts, it ends that run at once (a latch)."""
+        """End the run in progress after its instant, or the next run at once (a latch)."""
         self._stopping = True
 
     @property
@@ -315,8 +274,6 @@ class Runner:
         """A stop is asked and not yet taken by the run it ends."""
         return self._stopping
 
-    # ----------------------------------------------------------------- the loop
-
     def _run(self, end: int | None, predicate: Callable[[], bool] | None) -> None:
         outer = self._predicate
         self._predicate = predicate
@@ -325,13 +282,8 @@ class Runner:
         self._depth += 1
         stopped = False  # the stop ended this run (not its end, nor its predicate)
         try:
-            while True:
-                if self._stopping:
-                    stopped = True
-                    break
-                if predicate is not None and predicate():
-                    break
-                if not self._cycle(end, pace):
+            while not (stopped := self._stopping):
+                if (predicate is not None and predicate()) or not self._cycle(end, pace):
                     break
         except BaseException:
             stopped = self._stopping  # a stop's deadline (KeyboardInterrupt) ended it
@@ -371,8 +323,6 @@ class Runner:
             return self._walled
         return self._fast if self._reactor.watched else self._free
 
-    # -- what the pacing asks of the run in progress (fieldtwin.runtime.pacing.Course)
-
     @property
     def every_instant(self) -> bool:
         """A ``run_until`` predicate is checked after every instant."""
@@ -382,14 +332,8 @@ class Runner:
         """A stop is asked or the run's predicate holds."""
         return self._stopping or (self._predicate is not None and self._predicate())
 
-    def kept(self, woke: float, pace: Pace) -> None:
-        """After a paced step: sample the speed; move the pace if the clock lags too far."""
-        if not self._tempo.kept(woke, self.clock.now, pace):
-            self._ticks.lagged(self.clock.now)
-
 
 __all__ = [
-    "ACCEPT_BACKOFF_MAX_S",
     "ACCEPT_BACKOFF_S",
     "MAX_WAIT_S",
     "OUTPUT_BOUND",
