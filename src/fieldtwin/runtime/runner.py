@@ -282,8 +282,8 @@ class Runner:
         self._depth += 1
         stopped = False  # the stop ended this run (not its end, nor its predicate)
         try:
-            while not (stopped := self._stopping):
-                if (predicate is not None and predicate()) or not self._cycle(end, pace):
+            while not (predicate is not None and predicate()):
+                if (stopped := self._stopping) or not self._cycle(end, pace):
                     break
         except BaseException:
             stopped = self._stopping  # a stop's deadline (KeyboardInterrupt) ended it
