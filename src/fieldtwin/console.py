@@ -38,6 +38,7 @@ from fieldtwin.devices.face import Device, DeviceStatus, ModuleAddress
 from fieldtwin.errors import ConfigError, FieldtwinError
 from fieldtwin.live import tes_line
 from fieldtwin.plant import Plant
+from fieldtwin.runtime.door import Command
 from fieldtwin.signals.spec import file_in_spec
 from fieldtwin.tsx.addressing import parse_object
 from fieldtwin.tsx.plc import Plc
@@ -136,7 +137,8 @@ class Console:
         return self.plant.plc
 
     def execute(self, line: str, text: str | None = None) -> list[str]:
-        """Run one command line; returns its output lines (recorded: plant.record).
+        """Run one command line; returns its output lines (through the plant's door:
+        a recording sees it).
 
         ``text`` is the text that comes with the line (``prog load -`` takes a
         program's); it may also follow the line's first newline.  It is recorded with
@@ -149,11 +151,14 @@ class Console:
                     " text, not both"
                 )
             line = f"{line}\n{text}"
-        recorder = self.plant.recorder
-        if recorder is not None:
-            lines: list[str] = recorder.command("line", line, (), lambda: self._execute(line))
-            return lines
-        return self._execute(line)
+        # a value through the plant's door (fieldtwin.runtime.door): what observes the
+        # commands (a recording) sees it; this console runs it
+        lines = self.plant.door.dispatch(Command.line(line), self._run)
+        assert isinstance(lines, list)
+        return lines
+
+    def _run(self, command: Command) -> list[str]:
+        return self._execute(command.name)
 
     def _execute(self, full: str) -> list[str]:
         line, newline, attached = full.partition("\n")

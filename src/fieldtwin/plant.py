@@ -44,6 +44,7 @@ from fieldtwin.devices.module import ModuleDevice
 from fieldtwin.devices.schema import table_at
 from fieldtwin.errors import ConfigError
 from fieldtwin.facade.tes import Tes, tes_core
+from fieldtwin.runtime.door import Door
 from fieldtwin.runtime.events import EventBus
 from fieldtwin.runtime.pace import MAX_SPEED, MIN_SPEED
 from fieldtwin.textfile import read_text
@@ -89,6 +90,7 @@ class Plant:
     events: EventBus = field(default_factory=EventBus)  # what windows onto the plant observe
     source: PlantFile | None = None  # the file it was built from (a recording embeds it)
     recorder: Recorder | None = None  # plant.record(FILE): what enters and leaves is written
+    door: Door = field(default_factory=Door)  # every command from outside runs here
     bound: list[tuple[str, ...]] = field(default_factory=list)  # the binder groups opened
 
     # --- devices -----------------------------------------------------------
@@ -184,7 +186,7 @@ class Plant:
                 " load_plant): a replay rebuilds the plant from its file"
             )
         header = recording_header(self.source, self.speed)
-        recorder = Recorder(path, header, self.clock, self.devices, self.events)
+        recorder = Recorder(path, header, self.clock, self.devices, self.events, door=self.door)
         for groups in self.bound:
             recorder.bound(groups)
         if isinstance(pacer, _runner_type()):

@@ -23,9 +23,11 @@ from typing import Any
 from fieldtwin.clock import MS
 from fieldtwin.console import Console
 from fieldtwin.control.resources import Control
+from fieldtwin.control.sim import COMMANDS, serve
 from fieldtwin.errors import FieldtwinError
 from fieldtwin.plant import Plant, PlantFile, build_plant, embedded_plant, read_plant
 from fieldtwin.runtime.binder import ALL, bind
+from fieldtwin.runtime.door import Command
 from fieldtwin.runtime.recfile import RecordingError, extent
 from fieldtwin.runtime.recfile import records as numbered_records
 from fieldtwin.runtime.record import (
@@ -43,26 +45,8 @@ from fieldtwin.runtime.replay import Comparer, Feed, ReplayClock, ReplayRunner
 from fieldtwin.runtime.wall import SystemWall
 from fieldtwin.transports.virtual import Wiring
 
-# The control API's commands that are recorded (docs/record.md): every Control method a
-# route calls, except the pure readers (plant, status, LEDs, lists) and console_line,
-# whose console line the console records itself.
-CONTROL_COMMANDS = (
-    "set_input",
-    "set_fault",
-    "read_object",
-    "write_object",
-    "power_cycle",
-    "start_exchange",
-    "exchange",
-    "power_break",
-    "remove",
-    "insert",
-    "pause",
-    "resume",
-    "step",
-    "run_until",
-    "set_speed",
-)
+# The control API's commands that are recorded (docs/record.md): the door's CALL commands.
+CONTROL_COMMANDS = COMMANDS
 
 
 @dataclass(frozen=True, slots=True)
@@ -179,6 +163,7 @@ def _play(
             chars = CharsFeed(plant.events, out.append)
             sampler = Sampler(clock, plant.devices, out.append, header.sample_ms * MS)
             control = Control(plant, runner, plant.events)
+            serve(plant.door, control)  # the recorded calls run as the live API ran them
             runner.dispatch = _Dispatcher(plant, runner, control, header.console)
             runner.play()
             if feed.end is not None:
@@ -239,9 +224,10 @@ class _Dispatcher:
             except TypeError as exc:
                 feed.refuse(line, f"control {name}: {exc} ({len(args)} arguments recorded)")
                 return
-            self._command(line, f"control {name}", name, lambda: method(*args))
+            command = Command.call(name, *args)  # re-submitted through the plant's door
+            self._command(line, f"control {name}", name, lambda: self.plant.door.dispatch(command))
         elif kind == "line":
-            text = str(record[3])
+            text = str(record[3])  # the console runs it through the plant's door
             self._command(line, "console line", "console", lambda: self.console.execute(text))
 
     def _command(self, line: int, what: str, label: str, run: Callable[[], object]) -> None:
