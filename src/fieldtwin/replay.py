@@ -25,6 +25,7 @@ from fieldtwin.console import Console
 from fieldtwin.control.resources import Control
 from fieldtwin.control.sim import COMMANDS, serve
 from fieldtwin.errors import FieldtwinError
+from fieldtwin.facade.host import OsHost
 from fieldtwin.plant import Plant, PlantFile, build_plant, embedded_plant, read_plant
 from fieldtwin.runtime.binder import ALL, bind
 from fieldtwin.runtime.door import Command
@@ -43,6 +44,7 @@ from fieldtwin.runtime.record import (
 )
 from fieldtwin.runtime.replay import Comparer, Feed, ReplayClock, ReplayRunner
 from fieldtwin.runtime.wall import SystemWall
+from fieldtwin.transports.backends import REAL, Backends
 from fieldtwin.transports.virtual import Wiring
 
 # The control API's commands that are recorded (docs/record.md): the door's CALL commands.
@@ -157,21 +159,22 @@ def _play(
     clock = ReplayClock()
     runner = ReplayRunner(clock, header.speed, feed, wall, limit_us)
     runner.out = out
-    with Wiring():
-        plant = build_plant(plant_file, runner=runner, speed=header.speed)
-        try:
-            chars = CharsFeed(plant.events, out.append)
-            sampler = Sampler(clock, plant.devices, out.append, header.sample_ms * MS)
-            control = Control(plant, runner, plant.events)
-            serve(plant.door, control)  # the recorded calls run as the live API ran them
-            runner.dispatch = _Dispatcher(plant, runner, control, header.console)
-            runner.play()
-            if feed.end is not None:
-                runner.finish(feed.end[1], feed.end[2])
-            chars.close()
-            sampler.close()
-        finally:
-            plant.close()
+    # nothing real is opened: the binder and the PLC's host open virtual twins
+    backends = Wiring().backends
+    plant = build_plant(plant_file, runner=runner, speed=header.speed, host=OsHost(backends))
+    try:
+        chars = CharsFeed(plant.events, out.append)
+        sampler = Sampler(clock, plant.devices, out.append, header.sample_ms * MS)
+        control = Control(plant, runner, plant.events)
+        serve(plant.door, control)  # the recorded calls run as the live API ran them
+        runner.dispatch = _Dispatcher(plant, runner, control, header.console, backends)
+        runner.play()
+        if feed.end is not None:
+            runner.finish(feed.end[1], feed.end[2])
+        chars.close()
+        sampler.close()
+    finally:
+        plant.close()
     return runner
 
 
@@ -183,9 +186,15 @@ class _Dispatcher:
     the line (``feed.refuse``): nothing is raised through the plant's own code."""
 
     def __init__(
-        self, plant: Plant, runner: ReplayRunner, control: Control, console: str = "inline"
+        self,
+        plant: Plant,
+        runner: ReplayRunner,
+        control: Control,
+        console: str = "inline",
+        backends: Backends = REAL,
     ) -> None:
         self.plant = plant
+        self.backends = backends
         self.runner = runner
         self.control = control
         # console lines run as they ran when recorded (the header's console): the
@@ -207,7 +216,11 @@ class _Dispatcher:
                 return
             try:
                 binding = bind(
-                    self.plant.devices, self.runner, groups=groups, events=self.plant.events
+                    self.plant.devices,
+                    self.runner,
+                    groups=groups,
+                    events=self.plant.events,
+                    backends=self.backends,
                 )
             except FieldtwinError as exc:
                 feed.refuse(line, f"bind: {exc}")
