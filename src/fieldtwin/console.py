@@ -82,6 +82,19 @@ HELP = {
 ADVANCE_STEP_US = 100 * MS  # Ctrl-C is looked at between two steps of an advance
 
 
+def with_text(line: str, text: str | None) -> str:
+    """A console line and the text that comes with it, as one command line is recorded
+    (``LINE\nTEXT``); ConfigError when the line carries a text already."""
+    if text is None:
+        return line
+    if "\n" in line:
+        head = line.partition("\n")[0].strip()
+        raise ConfigError(
+            f"{head!r}: give the text after the line's first newline or as its text, not both"
+        )
+    return f"{line}\n{text}"
+
+
 class Console:
     """Executes console commands against a plant."""
 
@@ -143,21 +156,15 @@ class Console:
         ``text`` is the text that comes with the line (``prog load -`` takes a
         program's); it may also follow the line's first newline.  It is recorded with
         the line, as ``LINE\nTEXT``."""
-        if text is not None:
-            if "\n" in line:
-                head = line.partition("\n")[0].strip()
-                raise ConfigError(
-                    f"{head!r}: give the text after the line's first newline or as its"
-                    " text, not both"
-                )
-            line = f"{line}\n{text}"
         # a value through the plant's door (fieldtwin.runtime.door): what observes the
         # commands (a recording) sees it; this console runs it
-        lines = self.plant.door.dispatch(Command.line(line), self._run)
+        lines = self.plant.door.dispatch(Command.line(with_text(line, text)), self.handle)
         assert isinstance(lines, list)
         return lines
 
-    def _run(self, command: Command) -> list[str]:
+    def handle(self, command: Command) -> list[str]:
+        """Run a console-line command the door hands over (its line, and its text after
+        the first newline); its output lines."""
         return self._execute(command.name)
 
     def _execute(self, full: str) -> list[str]:

@@ -29,8 +29,7 @@ from fieldtwin.facade.host import OsHost
 from fieldtwin.plant import Plant, PlantFile, build_plant, embedded_plant, read_plant
 from fieldtwin.runtime.binder import ALL, bind
 from fieldtwin.runtime.door import Command
-from fieldtwin.runtime.recfile import RecordingError, extent
-from fieldtwin.runtime.recfile import records as numbered_records
+from fieldtwin.runtime.recfile import RecordingError
 from fieldtwin.runtime.record import (
     INPUTS,
     OUTPUTS,
@@ -42,6 +41,8 @@ from fieldtwin.runtime.record import (
     plain_json,
     read_header,
 )
+from fieldtwin.runtime.recstream import extent
+from fieldtwin.runtime.recstream import records as numbered_records
 from fieldtwin.runtime.replay import Comparer, Feed, ReplayClock, ReplayRunner
 from fieldtwin.runtime.wall import SystemWall
 from fieldtwin.transports.backends import REAL, Backends

@@ -24,6 +24,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.middleware.cors import CORSMiddleware
 
 from fieldtwin import __version__
+from fieldtwin.console import with_text
 from fieldtwin.control.dashboard import add_dashboard, add_docs
 from fieldtwin.control.document import allowed_methods, bodyless, declare, routed
 from fieldtwin.control.guards import BodyLimit, BrowserGate, TokenGate, origin_of
@@ -43,7 +44,7 @@ from fieldtwin.control.schemas import (
 )
 from fieldtwin.control.sim import DEFAULT_WAIT_S, CommandTimeout, Sim
 from fieldtwin.control.stream import add_stream
-from fieldtwin.errors import ConfigError
+from fieldtwin.errors import ConfigError, FieldtwinError
 from fieldtwin.runtime.inbox import InboxClosed, InboxFull
 
 T = TypeVar("T")
@@ -191,7 +192,7 @@ def create_app(
     async def run(fn: Callable[[], T], wait_s: float = DEFAULT_WAIT_S) -> T:
         return await sim.call(fn, wait_s)
 
-    _plant_routes(app, control, run)
+    _plant_routes(app, control, run, sim)
     _device_routes(app, control, run, sim.command)
     _plc_routes(app, control, run, sim.command)
     _clock_routes(app, control, run, sim.command)
@@ -218,7 +219,7 @@ Run = Callable[..., Any]
 Do = Callable[..., Any]  # Sim.command: a control command, a value through the plant's door
 
 
-def _plant_routes(app: FastAPI, c: Control, run: Run) -> None:
+def _plant_routes(app: FastAPI, c: Control, run: Run, sim: Sim) -> None:
     @app.get("/plant", summary="the plant, its clock and its devices")
     async def plant() -> Any:
         return await run(c.plant_json)
@@ -227,10 +228,17 @@ def _plant_routes(app: FastAPI, c: Control, run: Run) -> None:
     async def console(body: ConsoleBody) -> Any:
         # an advance or power break starts a runner mode: answered at its end (at most
         # wait_s), the plant serving every other request meanwhile
-        answer, ended = await run(
-            lambda: (c.console_line(body.line, body.text), c.take_console_mode()),
-            body.wait_s + 1,
-        )
+        # the line is a value through the plant's door, as every command
+        try:
+            answer, ended = await sim.line(
+                with_text(body.line, body.text),
+                then=lambda lines: ({"lines": lines, "error": None}, c.take_console_mode()),
+                wait_s=body.wait_s + 1,
+            )
+        except (InboxFull, InboxClosed):
+            raise  # the simulation's door is full or shut: 503, as for every command
+        except FieldtwinError as exc:  # the console's own refusal: its answer, not a 400
+            return {"lines": [], "error": str(exc)}
         if ended is None:
             return answer
         result = await _mode_end(c, ended, body.wait_s)

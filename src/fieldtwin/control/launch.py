@@ -75,7 +75,7 @@ def launch(
     server = ControlServer(control, inbox, sock, token, allow_origins=origins)
     runner.take_commands(inbox)
     launched = Launched(server, inbox, runner, Observer(plant.devices, bus))
-    launched.withdraw = serve(plant.door, control)
+    launched.withdraw = serve(plant.door, control, control.console.handle)
     try:
         url = server.start()
     except BaseException:

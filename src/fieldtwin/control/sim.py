@@ -18,7 +18,7 @@ from concurrent.futures import Future
 from typing import Any, TypeVar
 
 from fieldtwin.errors import ConfigError
-from fieldtwin.runtime.door import CALL, Command, Door
+from fieldtwin.runtime.door import CALL, LINE, Command, Door, Handler
 from fieldtwin.runtime.inbox import Inbox
 
 T = TypeVar("T")
@@ -51,9 +51,10 @@ class CommandTimeout(Exception):
     """The simulation did not finish the command within the request's wait."""
 
 
-def serve(door: Door, control: object) -> Callable[[], None]:
+def serve(door: Door, control: object, console: Handler | None = None) -> Callable[[], None]:
     """The door runs the control API's commands with ``control``'s methods of
-    :data:`COMMANDS`; the function returned withdraws them."""
+    :data:`COMMANDS`, and its console lines with ``console`` (the API's console's
+    ``handle``); the function returned withdraws them."""
 
     def run(command: Command) -> object:
         if command.name not in COMMANDS:
@@ -63,7 +64,15 @@ def serve(door: Door, control: object) -> Callable[[], None]:
         method: Callable[..., object] = getattr(control, command.name)
         return method(*command.args)
 
-    return door.serve(CALL, run)
+    withdraw = [door.serve(CALL, run)]
+    if console is not None:
+        withdraw.append(door.serve(LINE, console))
+
+    def withdraw_all() -> None:
+        for each in withdraw:
+            each()
+
+    return withdraw_all
 
 
 class Sim:
@@ -87,6 +96,18 @@ class Sim:
         """The control command ``name(*args)``, a value through the door; its answer
         (``then(answer)``, read on the simulation's thread in the same turn)."""
         future = self.inbox.submit_command(Command.call(name, *args), then)
+        return await self._wait(future, wait_s)
+
+    async def line(
+        self,
+        line: str,
+        *,
+        then: Callable[[Any], Any] | None = None,
+        wait_s: float = DEFAULT_WAIT_S,
+    ) -> Any:
+        """The console line ``line`` (its text after the first newline), a value through
+        the door; its output lines (``then(lines)``, read in the same turn)."""
+        future = self.inbox.submit_command(Command.line(line), then)
         return await self._wait(future, wait_s)
 
     @staticmethod

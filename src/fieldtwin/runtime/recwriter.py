@@ -28,9 +28,9 @@ from fieldtwin.runtime.recfile import (
     MiB,
     Record,
     check_header,
-    header_data,
 )
-from fieldtwin.runtime.recfile import records as numbered_records
+from fieldtwin.runtime.recstream import header_data
+from fieldtwin.runtime.recstream import records as numbered_records
 
 QUEUE = 50_000  # records handed to the writer and not yet written: past it the plant waits
 WRITE_BATCH = 2000  # records the writer's thread turns into one compressed write
