@@ -238,6 +238,7 @@ def _plant_routes(app: FastAPI, c: Control, run: Run, sim: Sim) -> None:
         except (InboxFull, InboxClosed):
             raise  # the simulation's door is full or shut: 503, as for every command
         except FieldtwinError as exc:  # the console's own refusal: its answer, not a 400
+            await run(c.take_console_mode)  # a refused line leaves no mode to wait for
             return {"lines": [], "error": str(exc)}
         if ended is None:
             return answer
