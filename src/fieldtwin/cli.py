@@ -313,10 +313,6 @@ def _run(args: argparse.Namespace) -> int:
         # the control API starts before any port opens: its imports and its server's start
         # take a second, and a master connecting at the `running` line must be served
         control = _start_control(args, plant, runner, plant.events)
-        if control is not None and plant.recorder is not None:
-            from fieldtwin.replay import CONTROL_COMMANDS
-
-            plant.recorder.instrument(control.server.control, CONTROL_COMMANDS)
         plant.note_bound(ALL)
         binding = bind(plant.devices, runner, events=plant.events)  # every port, once built
     except BaseException:
@@ -455,7 +451,9 @@ def _start_recording(
     # console lines reach `fieldtwin run` through the control API only, whose console
     # runs an advance or power break as a runner mode: replayed the same way
     header = replace(recording_header(plant.source, runner.speed), console="modes")
-    recorder = Recorder(args.record, header, plant.clock, plant.devices, plant.events, runner)
+    recorder = Recorder(
+        args.record, header, plant.clock, plant.devices, plant.events, runner, door=plant.door
+    )
     plant.recorder = recorder
 
     def close() -> None:

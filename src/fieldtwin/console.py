@@ -38,6 +38,7 @@ from fieldtwin.devices.face import Device, DeviceStatus, ModuleAddress
 from fieldtwin.errors import ConfigError, FieldtwinError
 from fieldtwin.live import tes_line
 from fieldtwin.plant import Plant
+from fieldtwin.runtime.door import Command
 from fieldtwin.signals.spec import file_in_spec
 from fieldtwin.tsx.addressing import parse_object
 from fieldtwin.tsx.plc import Plc
@@ -79,6 +80,19 @@ HELP = {
 
 
 ADVANCE_STEP_US = 100 * MS  # Ctrl-C is looked at between two steps of an advance
+
+
+def with_text(line: str, text: str | None) -> str:
+    """A console line and the text that comes with it, as one command line is recorded
+    (``LINE\nTEXT``); ConfigError when the line carries a text already."""
+    if text is None:
+        return line
+    if "\n" in line:
+        head = line.partition("\n")[0].strip()
+        raise ConfigError(
+            f"{head!r}: give the text after the line's first newline or as its text, not both"
+        )
+    return f"{line}\n{text}"
 
 
 class Console:
@@ -136,24 +150,22 @@ class Console:
         return self.plant.plc
 
     def execute(self, line: str, text: str | None = None) -> list[str]:
-        """Run one command line; returns its output lines (recorded: plant.record).
+        """Run one command line; returns its output lines (through the plant's door:
+        a recording sees it).
 
         ``text`` is the text that comes with the line (``prog load -`` takes a
         program's); it may also follow the line's first newline.  It is recorded with
         the line, as ``LINE\nTEXT``."""
-        if text is not None:
-            if "\n" in line:
-                head = line.partition("\n")[0].strip()
-                raise ConfigError(
-                    f"{head!r}: give the text after the line's first newline or as its"
-                    " text, not both"
-                )
-            line = f"{line}\n{text}"
-        recorder = self.plant.recorder
-        if recorder is not None:
-            lines: list[str] = recorder.command("line", line, (), lambda: self._execute(line))
-            return lines
-        return self._execute(line)
+        # a value through the plant's door (fieldtwin.runtime.door): what observes the
+        # commands (a recording) sees it; this console runs it
+        lines = self.plant.door.dispatch(Command.line(with_text(line, text)), self.handle)
+        assert isinstance(lines, list)
+        return lines
+
+    def handle(self, command: Command) -> list[str]:
+        """Run a console-line command the door hands over (its line, and its text after
+        the first newline); its output lines."""
+        return self._execute(command.name)
 
     def _execute(self, full: str) -> list[str]:
         line, newline, attached = full.partition("\n")

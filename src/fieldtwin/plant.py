@@ -44,9 +44,11 @@ from fieldtwin.devices.module import ModuleDevice
 from fieldtwin.devices.schema import table_at
 from fieldtwin.errors import ConfigError
 from fieldtwin.facade.tes import Tes, tes_core
+from fieldtwin.runtime.door import Door
 from fieldtwin.runtime.events import EventBus
 from fieldtwin.runtime.pace import MAX_SPEED, MIN_SPEED
 from fieldtwin.textfile import read_text
+from fieldtwin.tsx.bus import Host
 from fieldtwin.tsx.plc import MAX_PROGRAM_BYTES, MODELS, WATCHDOG_MS, WATCHDOG_RANGE_MS, Plc
 from fieldtwin.tsx.plcmemory import TxtDeclaration
 from fieldtwin.words import plant_word
@@ -89,6 +91,7 @@ class Plant:
     events: EventBus = field(default_factory=EventBus)  # what windows onto the plant observe
     source: PlantFile | None = None  # the file it was built from (a recording embeds it)
     recorder: Recorder | None = None  # plant.record(FILE): what enters and leaves is written
+    door: Door = field(default_factory=Door)  # every command from outside runs here
     bound: list[tuple[str, ...]] = field(default_factory=list)  # the binder groups opened
 
     # --- devices -----------------------------------------------------------
@@ -184,7 +187,7 @@ class Plant:
                 " load_plant): a replay rebuilds the plant from its file"
             )
         header = recording_header(self.source, self.speed)
-        recorder = Recorder(path, header, self.clock, self.devices, self.events)
+        recorder = Recorder(path, header, self.clock, self.devices, self.events, door=self.door)
         for groups in self.bound:
             recorder.bound(groups)
         if isinstance(pacer, _runner_type()):
@@ -312,17 +315,20 @@ def build_plant(
     clock: SimClock | None = None,
     runner: Runner | None = None,
     speed: float | str | None = FROM_PLANT,
+    host: Host | None = None,
 ) -> Plant:
     """Build the PLC, modules and TES of a plant file (no endpoint is opened).
 
     ``speed``: a factor, None for as fast as possible, or FROM_PLANT for ``[run] speed``.
+    ``host``: what opens the lines its modules wire (default: fieldtwin.hosting's,
+    real endpoints; a replay gives one with virtual backends).
     """
     data, name = plant_file.data, plant_file.name
     clock = clock or (runner.clock if runner is not None else SimClock())
     pace = plant_speed(plant_file) if speed == FROM_PLANT else speed
     assert not isinstance(pace, str)
     title = str(_table(data, "plant", name).get("name", Path(name).stem))
-    plc, outputs, program_keys = _build_plc(plant_file, clock, runner, pace)
+    plc, outputs, program_keys = _build_plc(plant_file, clock, runner, pace, host)
     ctx = BuildContext(clock, plc, plant_file.base_dir, name)
     for key, family in (("module", Family.MODULE), ("tes", Family.TES)):
         for index, table in enumerate(_array(data, key, name)):
@@ -427,7 +433,11 @@ def _speed(value: object, where: str) -> float | None:
 
 
 def _build_plc(
-    plant_file: PlantFile, clock: SimClock, runner: Runner | None, speed: float | None
+    plant_file: PlantFile,
+    clock: SimClock,
+    runner: Runner | None,
+    speed: float | None,
+    host: Host | None = None,
 ) -> tuple[Plc | None, object, dict[str, object]]:
     """The PLC of ``[plc]`` (or of a plant with modules), its ``outputs`` table and its
     program keys (``program``, ``constants``, ``text_blocks``)."""
@@ -473,6 +483,7 @@ def _build_plc(
         runner=runner,
         speed=speed,
         watchdog_ms=watchdog_ms,
+        host=host,
     )
     return plc, outputs, keys
 

@@ -23,11 +23,13 @@ from typing import Any
 from fieldtwin.clock import MS
 from fieldtwin.console import Console
 from fieldtwin.control.resources import Control
+from fieldtwin.control.sim import COMMANDS, serve
 from fieldtwin.errors import FieldtwinError
+from fieldtwin.facade.host import OsHost
 from fieldtwin.plant import Plant, PlantFile, build_plant, embedded_plant, read_plant
 from fieldtwin.runtime.binder import ALL, bind
-from fieldtwin.runtime.recfile import RecordingError, extent
-from fieldtwin.runtime.recfile import records as numbered_records
+from fieldtwin.runtime.door import Command
+from fieldtwin.runtime.recfile import RecordingError
 from fieldtwin.runtime.record import (
     INPUTS,
     OUTPUTS,
@@ -39,30 +41,15 @@ from fieldtwin.runtime.record import (
     plain_json,
     read_header,
 )
+from fieldtwin.runtime.recstream import extent
+from fieldtwin.runtime.recstream import records as numbered_records
 from fieldtwin.runtime.replay import Comparer, Feed, ReplayClock, ReplayRunner
 from fieldtwin.runtime.wall import SystemWall
+from fieldtwin.transports.backends import REAL, Backends
 from fieldtwin.transports.virtual import Wiring
 
-# The control API's commands that are recorded (docs/record.md): every Control method a
-# route calls, except the pure readers (plant, status, LEDs, lists) and console_line,
-# whose console line the console records itself.
-CONTROL_COMMANDS = (
-    "set_input",
-    "set_fault",
-    "read_object",
-    "write_object",
-    "power_cycle",
-    "start_exchange",
-    "exchange",
-    "power_break",
-    "remove",
-    "insert",
-    "pause",
-    "resume",
-    "step",
-    "run_until",
-    "set_speed",
-)
+# The control API's commands that are recorded (docs/record.md): the door's CALL commands.
+CONTROL_COMMANDS = COMMANDS
 
 
 @dataclass(frozen=True, slots=True)
@@ -173,20 +160,22 @@ def _play(
     clock = ReplayClock()
     runner = ReplayRunner(clock, header.speed, feed, wall, limit_us)
     runner.out = out
-    with Wiring():
-        plant = build_plant(plant_file, runner=runner, speed=header.speed)
-        try:
-            chars = CharsFeed(plant.events, out.append)
-            sampler = Sampler(clock, plant.devices, out.append, header.sample_ms * MS)
-            control = Control(plant, runner, plant.events)
-            runner.dispatch = _Dispatcher(plant, runner, control, header.console)
-            runner.play()
-            if feed.end is not None:
-                runner.finish(feed.end[1], feed.end[2])
-            chars.close()
-            sampler.close()
-        finally:
-            plant.close()
+    # nothing real is opened: the binder and the PLC's host open virtual twins
+    backends = Wiring().backends
+    plant = build_plant(plant_file, runner=runner, speed=header.speed, host=OsHost(backends))
+    try:
+        chars = CharsFeed(plant.events, out.append)
+        sampler = Sampler(clock, plant.devices, out.append, header.sample_ms * MS)
+        control = Control(plant, runner, plant.events)
+        serve(plant.door, control)  # the recorded calls run as the live API ran them
+        runner.dispatch = _Dispatcher(plant, runner, control, header.console, backends)
+        runner.play()
+        if feed.end is not None:
+            runner.finish(feed.end[1], feed.end[2])
+        chars.close()
+        sampler.close()
+    finally:
+        plant.close()
     return runner
 
 
@@ -198,9 +187,15 @@ class _Dispatcher:
     the line (``feed.refuse``): nothing is raised through the plant's own code."""
 
     def __init__(
-        self, plant: Plant, runner: ReplayRunner, control: Control, console: str = "inline"
+        self,
+        plant: Plant,
+        runner: ReplayRunner,
+        control: Control,
+        console: str = "inline",
+        backends: Backends = REAL,
     ) -> None:
         self.plant = plant
+        self.backends = backends
         self.runner = runner
         self.control = control
         # console lines run as they ran when recorded (the header's console): the
@@ -222,7 +217,11 @@ class _Dispatcher:
                 return
             try:
                 binding = bind(
-                    self.plant.devices, self.runner, groups=groups, events=self.plant.events
+                    self.plant.devices,
+                    self.runner,
+                    groups=groups,
+                    events=self.plant.events,
+                    backends=self.backends,
                 )
             except FieldtwinError as exc:
                 feed.refuse(line, f"bind: {exc}")
@@ -239,9 +238,10 @@ class _Dispatcher:
             except TypeError as exc:
                 feed.refuse(line, f"control {name}: {exc} ({len(args)} arguments recorded)")
                 return
-            self._command(line, f"control {name}", name, lambda: method(*args))
+            command = Command.call(name, *args)  # re-submitted through the plant's door
+            self._command(line, f"control {name}", name, lambda: self.plant.door.dispatch(command))
         elif kind == "line":
-            text = str(record[3])
+            text = str(record[3])  # the console runs it through the plant's door
             self._command(line, "console line", "console", lambda: self.console.execute(text))
 
     def _command(self, line: int, what: str, label: str, run: Callable[[], object]) -> None:

@@ -10,9 +10,8 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
 
 import httpx
 import pytest
@@ -21,6 +20,7 @@ from fieldtwin.clock import S
 from fieldtwin.control.resources import Control, refuse_files
 from fieldtwin.errors import ConfigError
 from fieldtwin.plant import Plant, load_plant
+from fieldtwin.runtime.door import Command
 from fieldtwin.runtime.runner import Runner
 from fieldtwin.signals.spec import file_in_spec
 from tests.control.plantproc import ROOT, default_plant_copy, fieldtwin_run
@@ -103,18 +103,20 @@ def test_prog_load_takes_the_program_text(control: Control) -> None:
 def test_the_text_is_recorded_with_its_line_and_replays(control: Control) -> None:
     recorded: list[str] = []
 
-    class Recorder:  # as runtime.record.Recorder.command: records the line, runs it
-        def command(self, kind: str, name: str, args: object, run: Callable[[], Any]) -> Any:
-            assert kind == "line"
-            recorded.append(name)
-            return run()
+    class Recorder:  # as runtime.record.Recorder: sees the door's commands
+        def before(self, command: Command) -> None:
+            assert command.kind == "line"
+            recorded.append(command.name)
+
+        def after(self, command: Command, answer: object, error: BaseException | None) -> None:
+            assert error is None
 
     plant = control.plant
-    plant.recorder = Recorder()  # type: ignore[assignment]
+    stop = plant.door.watch(Recorder())
     try:
         answer = control.console_line("prog load -", PROGRAM)
     finally:
-        plant.recorder = None
+        stop()
     assert recorded == ["prog load -\n" + PROGRAM]
     assert control.console.execute(recorded[0]) == answer["lines"]  # what a replay runs
 

@@ -24,6 +24,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.middleware.cors import CORSMiddleware
 
 from fieldtwin import __version__
+from fieldtwin.console import with_text
 from fieldtwin.control.dashboard import add_dashboard, add_docs
 from fieldtwin.control.document import allowed_methods, bodyless, declare, routed
 from fieldtwin.control.guards import BodyLimit, BrowserGate, TokenGate, origin_of
@@ -43,7 +44,7 @@ from fieldtwin.control.schemas import (
 )
 from fieldtwin.control.sim import DEFAULT_WAIT_S, CommandTimeout, Sim
 from fieldtwin.control.stream import add_stream
-from fieldtwin.errors import ConfigError
+from fieldtwin.errors import ConfigError, FieldtwinError
 from fieldtwin.runtime.inbox import InboxClosed, InboxFull
 
 T = TypeVar("T")
@@ -191,10 +192,10 @@ def create_app(
     async def run(fn: Callable[[], T], wait_s: float = DEFAULT_WAIT_S) -> T:
         return await sim.call(fn, wait_s)
 
-    _plant_routes(app, control, run)
-    _device_routes(app, control, run)
-    _plc_routes(app, control, run)
-    _clock_routes(app, control, run)
+    _plant_routes(app, control, run, sim)
+    _device_routes(app, control, run, sim.command)
+    _plc_routes(app, control, run, sim.command)
+    _clock_routes(app, control, run, sim.command)
     add_stream(app, control, sim)
     add_dashboard(app, control, run)
     add_docs(app)
@@ -215,9 +216,10 @@ def create_app(
 
 
 Run = Callable[..., Any]
+Do = Callable[..., Any]  # Sim.command: a control command, a value through the plant's door
 
 
-def _plant_routes(app: FastAPI, c: Control, run: Run) -> None:
+def _plant_routes(app: FastAPI, c: Control, run: Run, sim: Sim) -> None:
     @app.get("/plant", summary="the plant, its clock and its devices")
     async def plant() -> Any:
         return await run(c.plant_json)
@@ -226,17 +228,25 @@ def _plant_routes(app: FastAPI, c: Control, run: Run) -> None:
     async def console(body: ConsoleBody) -> Any:
         # an advance or power break starts a runner mode: answered at its end (at most
         # wait_s), the plant serving every other request meanwhile
-        answer, ended = await run(
-            lambda: (c.console_line(body.line, body.text), c.take_console_mode()),
-            body.wait_s + 1,
-        )
+        # the line is a value through the plant's door, as every command
+        try:
+            answer, ended = await sim.line(
+                with_text(body.line, body.text),
+                then=lambda lines: ({"lines": lines, "error": None}, c.take_console_mode()),
+                wait_s=body.wait_s + 1,
+            )
+        except (InboxFull, InboxClosed):
+            raise  # the simulation's door is full or shut: 503, as for every command
+        except FieldtwinError as exc:  # the console's own refusal: its answer, not a 400
+            await run(c.take_console_mode)  # a refused line leaves no mode to wait for
+            return {"lines": [], "error": str(exc)}
         if ended is None:
             return answer
         result = await _mode_end(c, ended, body.wait_s)
         return answer if result is None else await run(lambda: c.console_mode_answer(result))
 
 
-def _device_routes(app: FastAPI, c: Control, run: Run) -> None:
+def _device_routes(app: FastAPI, c: Control, run: Run, do: Do) -> None:
     @app.get(
         "/devices/{ident}",
         summary="a device's status: state, mode, LEDs, ports, active faults, outputs",
@@ -254,7 +264,7 @@ def _device_routes(app: FastAPI, c: Control, run: Run) -> None:
 
     @app.put("/devices/{ident}/inputs/{name}", summary="set an input, or drive it by a signal")
     async def set_input(ident: str, name: str, body: InputBody) -> Any:
-        return await run(lambda: c.set_input(ident, name, body.value, body.signal))
+        return await do("set_input", ident, name, body.value, body.signal)
 
     @app.get(
         "/devices/{ident}/faults",
@@ -265,11 +275,11 @@ def _device_routes(app: FastAPI, c: Control, run: Run) -> None:
 
     @app.put("/devices/{ident}/faults/{name}", summary="set (or clear) a fault")
     async def set_fault(ident: str, name: str, body: FaultBody) -> Any:
-        return await run(lambda: c.set_fault(ident, name, body.active, body.params))
+        return await do("set_fault", ident, name, body.active, body.params)
 
     @app.delete("/devices/{ident}/faults/{name}", summary="clear a fault")
     async def clear_fault(ident: str, name: str) -> Any:
-        return await run(lambda: c.set_fault(ident, name, False, {}))
+        return await do("set_fault", ident, name, False, {})
 
     @app.get(
         "/devices/{ident}/outputs",
@@ -285,47 +295,45 @@ def _device_routes(app: FastAPI, c: Control, run: Run) -> None:
 
     @app.get("/devices/{ident}/objects/{name}", summary="read an object (peek: no side effect)")
     async def read_object(ident: str, name: str, peek: bool = Query(False)) -> Any:
-        return await run(lambda: c.read_object(ident, name, peek))
+        return await do("read_object", ident, name, peek)
 
     @app.put("/devices/{ident}/objects/{name}", summary="write an object")
     async def write_object(ident: str, name: str, body: ObjectBody) -> Any:
-        return await run(lambda: c.write_object(ident, name, body.value))
+        return await do("write_object", ident, name, body.value)
 
     @app.post("/devices/{ident}/power-cycle", summary="a TES: 24 V off and on again")
     async def power_cycle(ident: str) -> Any:
-        return await run(lambda: c.power_cycle(ident))
+        return await do("power_cycle", ident)
 
 
-def _plc_routes(app: FastAPI, c: Control, run: Run) -> None:
+def _plc_routes(app: FastAPI, c: Control, run: Run, do: Do) -> None:
     @app.post("/exchanges", status_code=202, summary="start a Text Block exchange")
     async def start(body: ExchangeBody) -> Any:
-        return await run(
-            lambda: c.start_exchange(
-                body.m, body.c, body.send, body.text, body.length, body.recv, body.txt
-            )
+        return await do(
+            "start_exchange", body.m, body.c, body.send, body.text, body.length, body.recv, body.txt
         )
 
     @app.get("/exchanges/{ident}", summary="an exchange: state, and its result once done")
     async def poll(ident: int) -> Any:
-        return await run(lambda: c.exchange(ident))
+        return await do("exchange", ident)
 
     @app.post("/plc/power-break", summary="cut the PLC supply for some seconds (a mode)")
     async def power_break(body: PowerBreakBody) -> Any:
-        return await _mode(run, c, lambda: c.power_break(body.seconds), body)
+        return await _mode(run, do, c, ("power_break", body.seconds), body)
 
     @app.post("/plc/remove", summary="pull a module out of its slot under power")
     async def remove(body: ModuleBody) -> Any:
-        return await run(lambda: c.remove(body.module))
+        return await do("remove", body.module)
 
     @app.post("/plc/insert", summary="put a module back (it runs its self-test)")
     async def insert(body: ModuleBody) -> Any:
-        return await run(lambda: c.insert(body.module))
+        return await do("insert", body.module)
 
 
-async def _mode(run: Run, c: Control, start: Callable[[], Any], body: ModeBody) -> Any:
+async def _mode(run: Run, do: Do, c: Control, start: tuple[str, float], body: ModeBody) -> Any:
     """Start a runner mode (step, run-until, power-break); its state at once, or with
     ``wait`` at its end (at most ``wait_s``; the run stopping ends the wait too)."""
-    state, ended = await run(lambda: (start(), c.mode_ended))
+    state, ended = await do(*start, then=lambda state: (state, c.mode_ended))
     if not body.wait or ended is None:
         return state
     result = await _mode_end(c, ended, body.wait_s)
@@ -350,31 +358,31 @@ async def _mode_end(c: Control, ended: Future[Any], wait_s: float) -> Any | None
     return done.result() if ended_now else None
 
 
-def _clock_routes(app: FastAPI, c: Control, run: Run) -> None:
+def _clock_routes(app: FastAPI, c: Control, run: Run, do: Do) -> None:
     @app.get("/clock", summary="simulated time, paused or not, speed")
     async def clock() -> Any:
         return await run(c.clock_json)
 
     @app.post("/clock/pause", summary="hold simulated time")
     async def pause() -> Any:
-        return await run(c.pause)
+        return await do("pause")
 
     @app.post("/clock/resume", summary="let simulated time run again")
     async def resume() -> Any:
-        return await run(c.resume)
+        return await do("resume")
 
     @app.post("/clock/step", summary="run simulated time by ms, paused or not (a mode)")
     async def step(body: StepBody) -> Any:
-        return await _mode(run, c, lambda: c.step(body.ms), body)
+        return await _mode(run, do, c, ("step", body.ms), body)
 
     @app.post("/clock/run-until", summary="run simulated time until t_s (a mode)")
     async def run_until(body: RunUntilBody) -> Any:
-        return await _mode(run, c, lambda: c.run_until(body.t_s), body)
+        return await _mode(run, do, c, ("run_until", body.t_s), body)
 
     @app.put("/clock/speed", summary="change the speed factor (or max)")
     async def speed(body: SpeedBody) -> Any:
         value = None if body.speed == "max" else float(body.speed)
-        return await run(lambda: c.set_speed(value))
+        return await do("set_speed", value)
 
 
 __all__ = ["create_app"]

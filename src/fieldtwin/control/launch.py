@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 from fieldtwin.control.guards import origin_of
@@ -15,6 +15,7 @@ from fieldtwin.control.server import (
     bind_control,
     new_token,
 )
+from fieldtwin.control.sim import serve
 from fieldtwin.errors import ConfigError
 from fieldtwin.plant import Plant
 from fieldtwin.runtime.events import EventBus
@@ -33,6 +34,7 @@ class Launched:
     observer: Observer
     lines: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
+    withdraw: Callable[[], None] | None = None  # the door's control commands, withdrawn
 
     @property
     def url(self) -> str:
@@ -42,6 +44,8 @@ class Launched:
         self.runner.take_commands(None)
         self.server.close()
         self.inbox.close()
+        if self.withdraw is not None:
+            self.withdraw()
 
 
 def launch(
@@ -65,12 +69,13 @@ def launch(
         raise ConfigError("--control-token: an empty token is not allowed")
     host = host or DEFAULT_HOST
     sock = bind_control(host, DEFAULT_PORT if port is None else port, fallback=port is None)
-    inbox = Inbox()
+    inbox = Inbox(door=plant.door)  # commands are values the plant's door runs
     control = Control(plant, runner, bus)
     origins = check_origins(allow_origins)
     server = ControlServer(control, inbox, sock, token, allow_origins=origins)
     runner.take_commands(inbox)
     launched = Launched(server, inbox, runner, Observer(plant.devices, bus))
+    launched.withdraw = serve(plant.door, control, control.console.handle)
     try:
         url = server.start()
     except BaseException:

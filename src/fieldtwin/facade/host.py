@@ -15,7 +15,8 @@ from fieldtwin.devices.faults import FaultParam
 from fieldtwin.errors import ConfigError
 from fieldtwin.facade import faults
 from fieldtwin.runtime.runner import Runner
-from fieldtwin.transports import listen, open_pty, open_serial, parse_endpoint
+from fieldtwin.transports import parse_endpoint
+from fieldtwin.transports.backends import REAL, Backends
 from fieldtwin.transports.base import Transport, line_settings
 from fieldtwin.transports.tcp import listener_url
 from fieldtwin.tsx.bus import Pacer
@@ -24,7 +25,11 @@ from fieldtwin.tsx.scm.line import Line
 
 
 class OsHost:
-    """Pacing by a Runner; SCM channel lines on ptys, serial devices and TCP."""
+    """Pacing by a Runner; SCM channel lines on ptys, serial devices and TCP, opened
+    by ``backends`` (the real ones, or a replay's virtual twins)."""
+
+    def __init__(self, backends: Backends = REAL) -> None:
+        self.backends = backends
 
     def fault_names(self, core: object) -> Mapping[str, str]:
         """The fault names a core's kind takes (``Tes.fault_names()``, docs/tes.md)."""
@@ -51,17 +56,17 @@ class OsHost:
             fmt.baud, fmt.data_bits, fmt.parity.letter, fmt.stop_bits
         )
         if endpoint.scheme == "pty":
-            port.peer = open_pty(settings)
+            port.peer = self.backends.pty(settings)
             port.path = port.peer.peer_path
             pacer.attach(port.peer, port.feed)
         elif endpoint.scheme == "serial":
             assert endpoint.device is not None
-            port.peer = open_serial(endpoint.device, settings)
+            port.peer = self.backends.serial(endpoint.device, settings)
             port.path = endpoint.device
             pacer.attach(port.peer, port.feed)
         elif endpoint.scheme == "tcp":
             assert endpoint.host is not None and endpoint.port is not None
-            port.listener = listen(endpoint.host, endpoint.port)
+            port.listener = self.backends.listener(endpoint.host, endpoint.port)
             port.path = listener_url("tcp", port.listener.address)
             pacer.attach_listener(port.listener, lambda t, now: _connected(port, t))
         else:

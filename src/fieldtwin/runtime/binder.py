@@ -17,6 +17,11 @@ stream a device offers (:meth:`~fieldtwin.devices.face.Device.streams`: a DEM's
 messages, an SCM's characters) is published there.  ``fieldtwin run`` binds every
 group; ``load_plant`` (and so the console) binds the ``scm`` group only, leaving
 the Modbus endpoints closed.  Nothing here knows a device kind.
+
+The shared Modbus endpoints are opened by the ``backends`` given (the real ones by
+default; a replay gives virtual ones, fieldtwin.transports.virtual); a port that
+opens its own line does so through its device, whose PLC's host holds the same
+choice (``build_plant(host=...)``).
 """
 
 from __future__ import annotations
@@ -29,6 +34,7 @@ from fieldtwin.errors import ConfigError
 from fieldtwin.runtime.events import EventBus
 from fieldtwin.runtime.modbus_server import ModbusServer
 from fieldtwin.runtime.runner import Runner
+from fieldtwin.transports.backends import REAL, Backends
 from fieldtwin.transports.url import parse_endpoint
 
 MODBUS = SHARED_MODBUS
@@ -53,7 +59,7 @@ class Binding:
             close()
 
 
-Opener = Callable[[Sequence[Device], "Runner | None", Binding, "EventBus | None"], None]
+Opener = Callable[[Sequence[Device], "Runner | None", Binding, "EventBus | None", Backends], None]
 
 
 def bind(
@@ -62,14 +68,16 @@ def bind(
     *,
     groups: Collection[str] = ALL,
     events: EventBus | None = None,
+    backends: Backends = REAL,
 ) -> Binding:
     """Open the ports of ``devices`` in ``groups`` (shared Modbus endpoints first, then
-    the ports that open their own line); with ``events``, their traffic is published there."""
+    the ports that open their own line) with ``backends``; with ``events``, their
+    traffic is published there."""
     binding = Binding()
     try:
         for group, opener in OPENERS.items():
             if group in groups:
-                opener(devices, runner, binding, events)
+                opener(devices, runner, binding, events, backends)
         if SERIAL_LINE in groups and events is not None:  # once per plant, after the lines
             _tap_streams(devices, binding, events)
     except BaseException:
@@ -79,7 +87,11 @@ def bind(
 
 
 def _serve_modbus(
-    devices: Sequence[Device], runner: Runner | None, binding: Binding, events: EventBus | None
+    devices: Sequence[Device],
+    runner: Runner | None,
+    binding: Binding,
+    events: EventBus | None,
+    backends: Backends,
 ) -> None:
     from fieldtwin.runtime.modbus_lines import serve_group
 
@@ -93,7 +105,7 @@ def _serve_modbus(
     for url, members in lines.items():
         assert runner is not None
         # the plant builder checked that every slave on one endpoint names the same port
-        server: ModbusServer = serve_group(runner, parse_endpoint(url), members)
+        server: ModbusServer = serve_group(runner, parse_endpoint(url), members, backends)
         if events is not None:
             server.tap(events, url)
         binding.add([server.describe()], server.close)
@@ -105,7 +117,11 @@ def _serve_modbus(
 
 
 def _open_own_lines(
-    devices: Sequence[Device], runner: Runner | None, binding: Binding, events: EventBus | None
+    devices: Sequence[Device],
+    runner: Runner | None,
+    binding: Binding,
+    events: EventBus | None,
+    backends: Backends,
 ) -> None:
     for device in devices:
         for port in device.ports():

@@ -1,7 +1,9 @@
 """Commands entering the simulation at an instant the runner chooses (DESIGN rule 13).
 
-Another thread (the control API's web server) ``submit``s a function and gets a
-``concurrent.futures.Future``; the runner, which watches the inbox's wakeup
+Another thread (the control API's web server) ``submit``s a command - a
+:class:`~fieldtwin.runtime.door.Command` value, run by the plant's door (the one
+dispatcher, which a recording observes), or a function that only reads - and
+gets a ``concurrent.futures.Future``; the runner, which watches the inbox's wakeup
 descriptor beside its transports, runs the pending functions on the simulation's
 thread between two instants (``run_pending``), in the order they were submitted,
 and sets each future's result or exception.  A future cancelled before its turn
@@ -22,6 +24,7 @@ from dataclasses import dataclass
 from typing import Any, TypeVar
 
 from fieldtwin.errors import FieldtwinError
+from fieldtwin.runtime.door import Command, Door
 
 T = TypeVar("T")
 MAX_PENDING = 256  # commands waiting for the runner before submit refuses
@@ -37,18 +40,20 @@ class InboxClosed(FieldtwinError):
 
 @dataclass(frozen=True, slots=True)
 class _Command:
-    run: Callable[[], Any]
+    run: Callable[[], Any] | Command
     future: Future[Any]
+    then: Callable[[Any], Any] | None = None  # the answer's reading, in the same turn
 
 
 class Inbox:
     """A bounded, thread-safe queue of commands with a wakeup descriptor: a socket pair,
     not a pipe, so that select() takes it everywhere (on Windows it takes sockets only)."""
 
-    def __init__(self, max_pending: int = MAX_PENDING) -> None:
+    def __init__(self, max_pending: int = MAX_PENDING, door: Door | None = None) -> None:
         if max_pending < 1:
             raise ValueError("an inbox holds at least one command")
         self.max_pending = max_pending
+        self.door = door  # what runs the Command values (None: functions only)
         self._reader, self._writer = socket.socketpair()
         self._reader.setblocking(False)
         self._writer.setblocking(False)
@@ -63,13 +68,25 @@ class Inbox:
 
     def submit(self, run: Callable[[], T]) -> Future[T]:
         """From any thread: run ``run()`` on the simulation's thread; its future."""
-        future: Future[T] = Future()
+        return self._submit(_Command(run, Future()))
+
+    def submit_command(
+        self, command: Command, then: Callable[[Any], Any] | None = None
+    ) -> Future[Any]:
+        """From any thread: ``command`` run by the door on the simulation's thread; its
+        future gives its answer (``then(answer)`` when given, read in the same turn)."""
+        if self.door is None:
+            raise ValueError("this inbox has no door to run commands")
+        return self._submit(_Command(command, Future(), then))
+
+    def _submit(self, item: _Command) -> Future[Any]:
+        future = item.future
         with self._lock:
             if self.closed:
                 raise InboxClosed("the simulation has stopped")
             if len(self._queue) >= self.max_pending:
                 raise InboxFull(f"{self.max_pending} commands already wait for the simulation")
-            self._queue.append(_Command(run, future))
+            self._queue.append(item)
         with contextlib.suppress(BlockingIOError):  # full of wakeups already: it will look
             self._writer.send(b"\0")
         return future
@@ -87,7 +104,14 @@ class Inbox:
             if not command.future.set_running_or_notify_cancel():
                 continue  # its requester gave up before its turn
             try:
-                result = command.run()
+                run = command.run
+                if isinstance(run, Command):
+                    assert self.door is not None
+                    result = self.door.dispatch(run)
+                    if command.then is not None:
+                        result = command.then(result)
+                else:
+                    result = run()
             except Exception as exc:  # the requester gets it; the plant keeps running
                 command.future.set_exception(exc)
             except BaseException as exc:  # Ctrl-C, SystemExit: tell the requester, then stop

@@ -19,10 +19,8 @@ from fieldtwin.runtime.modbus_server import (
     serve_tcp,
 )
 from fieldtwin.runtime.runner import Runner
+from fieldtwin.transports.backends import REAL, Backends
 from fieldtwin.transports.base import LineSettings
-from fieldtwin.transports.pty import open_pty
-from fieldtwin.transports.serial import open_serial
-from fieldtwin.transports.tcp import listen
 from fieldtwin.transports.url import Endpoint
 
 
@@ -40,27 +38,34 @@ def line_settings(endpoint: Endpoint, slaves: Sequence[ModbusSlave]) -> LineSett
     return settings
 
 
-def serve_group(runner: Runner, endpoint: Endpoint, slaves: Sequence[ModbusSlave]) -> ModbusServer:
-    """Serve ``slaves`` (one endpoint, one port of theirs: the plant checked) there."""
+def serve_group(
+    runner: Runner,
+    endpoint: Endpoint,
+    slaves: Sequence[ModbusSlave],
+    backends: Backends = REAL,
+) -> ModbusServer:
+    """Serve ``slaves`` (one endpoint, one port of theirs: the plant checked) there, on
+    an endpoint ``backends`` opens (real, or a replay's virtual one)."""
     link = slaves[0].link
     devices = [s.slave for s in slaves]
     if endpoint.scheme == "tcp":
         assert endpoint.host is not None and endpoint.port is not None
         # a gateway in front of the RS-232 port uses that port's number, counters, delay
         tcp_link = Link.RS232 if link is Link.RS232 else Link.TCP
-        return serve_tcp(runner, listen(endpoint.host, endpoint.port), devices, tcp_link)
+        listener = backends.listener(endpoint.host, endpoint.port)
+        return serve_tcp(runner, listener, devices, tcp_link)
     settings = line_settings(endpoint, slaves)
     # the plant checked that every slave of one line has the same wire timing
     wire = all(s.wire_timing for s in slaves)
     if endpoint.scheme == "rtu+tcp":
         assert endpoint.host is not None and endpoint.port is not None
-        listener = listen(endpoint.host, endpoint.port)
+        listener = backends.listener(endpoint.host, endpoint.port)
         return serve_rtu_over_tcp(runner, listener, devices, settings, link, wire_timing=wire)
     if endpoint.scheme == "pty":
-        return serve_rtu(runner, open_pty(settings), devices, link, settings, wire_timing=wire)
+        return serve_rtu(runner, backends.pty(settings), devices, link, settings, wire_timing=wire)
     if endpoint.scheme == "serial":
         assert endpoint.device is not None
-        transport = open_serial(endpoint.device, settings)
+        transport = backends.serial(endpoint.device, settings)
         return serve_rtu(runner, transport, devices, link, settings, wire_timing=wire)
     raise ConfigError(
         f"endpoint {endpoint}: cannot serve Modbus slaves there"

@@ -13,8 +13,8 @@ before them, so that a replay delivers them between the very same two events)::
     ["accept", t, fired, "l1"]                a connection on listener l1
     ["data",   t, fired, "t3", "0001..."]     bytes that arrived on transport t3
     ["close",  t, fired, "t3"]                the peer closed t3
-    ["call",   t, fired, "set_input", [...]]  a control-API command (Control method)
-    ["line",   t, fired, "advance 5"]         a console command line
+    ["call",   t, fired, "set_input", [...]]  a control-API command (a door Command)
+    ["line",   t, fired, "advance 5"]         a console command line (a door Command)
     ["ret",    t, fired]                      the command before returned here
 
 outputs (the simulated instant only; a replay must produce them identically)::
@@ -35,231 +35,44 @@ so a replay that binds the same plant names them the same, whatever ports and
 pty paths the recording got.  Objects and LEDs are looked at (peeked, never
 read) every ``sample_ms`` of simulated time by a clock event of the recorder's
 own, which both the recording and its replay have.
-
-The simulation's thread only appends each record, raw (the bytes as bytes), to the
-writer's bounded queue (``QUEUE`` records); the writer's thread turns them into JSON
-(bytes into hex), compresses and writes them, in order.  A recording is an input log
-and stays complete: when its writer falls behind and the queue is full, the plant
-waits for it (the time waited is told when the recording closes; docs/record.md).
+What enters is seen where it enters: bytes and connections through the runner's
+attach tap (``Recorder.link`` and ``listener``: the transport's ``observe_sends``
+shows what the plant sends), commands through the plant's door
+(fieldtwin.runtime.door: ``before`` and ``after`` each outermost command).  The
+file itself is fieldtwin.runtime.recwriter's.
 """
 
 from __future__ import annotations
 
-import gzip
 import json
-import threading
-import time
-from collections import deque
-from collections.abc import Callable, Collection, Generator, Iterator, Mapping, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from fieldtwin import __version__
 from fieldtwin.clock import MS, Handle, SimClock
 from fieldtwin.devices.face import Device, peeker
 from fieldtwin.devices.module import ModuleDevice, PlcObjects
-from fieldtwin.errors import ConfigError, FieldtwinError
+from fieldtwin.errors import FieldtwinError
+from fieldtwin.runtime.door import LINE, Command, Door
 from fieldtwin.runtime.events import Event, EventBus
-from fieldtwin.runtime.recfile import (
-    FORMAT,
-    INPUT_KINDS,
-    MAX_HEADER_BYTES,
-    OUTPUT_KINDS,
-    VERSION,
-    MiB,
-    Record,
-    check_header,
-    header_data,
+from fieldtwin.runtime.recfile import FORMAT, INPUT_KINDS, OUTPUT_KINDS, VERSION, Record
+from fieldtwin.runtime.recwriter import (
+    QUEUE,
+    Header,
+    Keys,
+    RecordWriter,
+    iter_records,
+    read_header,
+    read_recording,
 )
-from fieldtwin.runtime.recfile import records as numbered_records
 from fieldtwin.runtime.runner import CloseCallback, ConnectCallback, DataCallback, Runner
-from fieldtwin.transports.base import Listener, Transport
+from fieldtwin.transports.base import Listener, SendObservable, Transport
 
 SAMPLE_MS = 100  # objects and LEDs are looked at this often (simulated ms)
 SAMPLE_PRIORITY = 1 << 30  # after every plant event of the same instant
 MAX_OBJECTS = 4096  # objects one device is looked at for
 INPUTS = INPUT_KINDS
 OUTPUTS = OUTPUT_KINDS
-
-ORIGINAL_SEND = "_fieldtwin_unrecorded_send"  # where a recorded transport keeps its send
-QUEUE = 50_000  # records handed to the writer and not yet written: past it the plant waits
-WRITE_BATCH = 2000  # records the writer's thread turns into one compressed write
-WRITE_S = 0.01  # the writer's thread takes what was queued this often
-
-
-@dataclass(frozen=True, slots=True)
-class Header:
-    """What a recording starts with."""
-
-    plant_name: str
-    plant_text: str
-    files: Mapping[str, str]  # a name the plant file gives -> that file's text (latin-1)
-    speed: float | None
-    sample_ms: int
-    version: int = VERSION
-    fieldtwin: str = __version__
-    console: str = "inline"  # how its console lines ran: one of recfile.CONSOLES
-
-    def as_json(self) -> dict[str, object]:
-        return {
-            "format": FORMAT,
-            "version": self.version,
-            "fieldtwin": self.fieldtwin,
-            "plant": {"name": self.plant_name, "text": self.plant_text, "files": dict(self.files)},
-            "speed": self.speed,
-            "sample_ms": self.sample_ms,
-            "console": self.console,
-        }
-
-    @classmethod
-    def from_json(cls, data: object, where: str) -> Header:
-        """The header of a recording, every field checked (fieldtwin.runtime.recfile)."""
-        fields = check_header(data, where)
-        plant, speed = fields["plant"], fields["speed"]
-        return cls(
-            plant["name"],
-            plant["text"],
-            dict(plant["files"]),
-            None if speed is None else float(speed),
-            fields["sample_ms"],
-            fields["version"],
-            fields["fieldtwin"],
-            fields["console"],
-        )
-
-
-class Keys:
-    """Names of transports and listeners in the order they are attached (t1.., l1..)."""
-
-    def __init__(self) -> None:
-        self._links = 0
-        self._listeners = 0
-
-    def link(self) -> str:
-        self._links += 1
-        return f"t{self._links}"
-
-    def listener(self) -> str:
-        self._listeners += 1
-        return f"l{self._listeners}"
-
-
-# ------------------------------------------------------------------------- the file
-
-
-class RecordWriter:
-    """A gzip file of JSON lines: the header, then the records, written by a thread of
-    its own from a bounded queue (``add`` waits when the queue is full)."""
-
-    def __init__(self, path: str | Path, header: Header) -> None:
-        self.path = Path(path)
-        size = len(_line(header.as_json()))
-        if size > MAX_HEADER_BYTES:  # a replay would refuse it: say so now
-            raise ConfigError(
-                f"--record {path}: the plant file and the files it names make a header of"
-                f" {size / MiB:.1f} MiB; a recording's header is at most"
-                f" {MAX_HEADER_BYTES // MiB} MiB (docs/record.md)"
-            )
-        try:
-            self._file: gzip.GzipFile | None = gzip.GzipFile(self.path, "wb", compresslevel=6)
-        except OSError as exc:
-            raise ConfigError(f"--record {path}: cannot write ({exc.strerror})") from None
-        self.records = 0
-        self.waited_s = 0.0  # how long the plant waited for the writer (a full queue)
-        self.waits = 0
-        self.failed: BaseException | None = None  # what stopped the writer's thread
-        self._file.write(_line(header.as_json()))
-        self._queue: deque[Record] = deque()
-        self._room = threading.Condition()
-        self._ending = False
-        self._thread: threading.Thread | None = threading.Thread(
-            target=self._write_all, name="fieldtwin-record", daemon=True
-        )
-        self._thread.start()
-
-    def add(self, record: Record) -> None:
-        """Hand one record to the writer (the simulation's thread): waits while the
-        writer is ``QUEUE`` records behind."""
-        if self._thread is None:
-            return
-        if self.failed is not None:
-            raise self.failed
-        pending = self._queue
-        if len(pending) >= QUEUE:
-            started = time.perf_counter()
-            with self._room:
-                while len(pending) >= QUEUE and self.failed is None:
-                    self._room.wait(WRITE_S)
-            self.waited_s += time.perf_counter() - started
-            self.waits += 1
-        self.records += 1
-        pending.append(record)
-
-    def _write_all(self) -> None:
-        file, pending = self._file, self._queue
-        assert file is not None
-        while True:
-            ending = self._ending
-            if not ending:
-                time.sleep(WRITE_S)  # a batch gathers: no wake-up per record
-            while pending:
-                count = min(WRITE_BATCH, len(pending))
-                batch = [pending.popleft() for _ in range(count)]
-                if self.failed is None:
-                    try:
-                        file.write(b"".join(_line(record) for record in batch))
-                    except (OSError, ValueError) as exc:
-                        self.failed = exc  # told on the next add() or on close()
-                with self._room:
-                    self._room.notify_all()
-            if ending:
-                return
-
-    def close(self) -> None:
-        """Write what is queued, then close the file (idempotent)."""
-        thread, self._thread = self._thread, None
-        if thread is not None:
-            self._ending = True
-            thread.join()
-        if self._file is not None:
-            file, self._file = self._file, None
-            file.close()
-        if self.failed is not None:
-            failed, self.failed = self.failed, None
-            raise failed
-
-
-def _line(item: object) -> bytes:
-    text = json.dumps(item, separators=(",", ":"), ensure_ascii=False, default=_plain)
-    return text.encode("utf-8") + b"\n"
-
-
-def _plain(value: object) -> object:
-    """Bytes as hex (the simulation's thread hands them raw), anything else as text."""
-    if isinstance(value, bytes | bytearray | memoryview):
-        return bytes(value).hex()
-    return str(value)
-
-
-def read_recording(path: str | Path) -> tuple[Header, list[Record]]:
-    """The header and the records of a recording, whole (a short one: tests, tools);
-    errors name the file and the line."""
-    return read_header(path), list(iter_records(path))
-
-
-def read_header(path: str | Path) -> Header:
-    return Header.from_json(header_data(path), str(path))
-
-
-def iter_records(
-    path: str | Path, kinds: Collection[str] | None = None
-) -> Generator[Record, None, None]:
-    """The records after the header, one at a time (of ``kinds`` only, when given): a
-    recording of hours is never held in memory whole.  Every line is checked as
-    untrusted input (fieldtwin.runtime.recfile): bounded, of its kind's form, in time
-    order."""
-    return (record for _, record in numbered_records(path, kinds))
 
 
 # ------------------------------------------------------------------------- sampling
@@ -366,7 +179,8 @@ class Recorder:
     """Writes what enters and leaves one plant (see the module docstring).
 
     Install it before any port opens (``runner.set_tap(recorder)`` wraps those
-    already attached, in order); ``close()`` writes the end record and the file.
+    already attached, in order) and on the plant's door (``door``: it sees every
+    outermost command); ``close()`` writes the end record and the file.
     """
 
     def __init__(
@@ -377,16 +191,21 @@ class Recorder:
         devices: Sequence[Device],
         bus: EventBus,
         runner: Runner | None = None,
+        *,
+        door: Door | None = None,
     ) -> None:
         self.clock = clock
         self.writer = RecordWriter(path, header)
         self.keys = Keys()
-        self._depth = 0  # inside a recorded command: its inner calls are its own
         self.closed = False
         self._chars = CharsFeed(bus, self.writer.add)
         self._sampler = Sampler(clock, devices, self.writer.add, header.sample_ms * MS)
+        self._observed: list[SendObservable] = []  # transports whose sends it sees
+        self._unwatch: Callable[[], None] | None = None
         if runner is not None:
             runner.set_tap(self)
+        if door is not None:
+            self.watch(door)
 
     @property
     def path(self) -> Path:
@@ -400,16 +219,10 @@ class Recorder:
     def link(
         self, transport: Transport, on_data: DataCallback, on_close: CloseCallback | None
     ) -> tuple[DataCallback, CloseCallback | None]:
-        key = self.keys.link()
-        # the instance's own send, wrapped once (attached again: the first send, a new key)
-        send: Callable[[bytes], None] = getattr(transport, ORIGINAL_SEND, transport.send)
-
-        def sending(data: bytes) -> None:
-            self.writer.add(["send", self.clock.now, key, bytes(data)])  # hex: the writer's
-            send(data)
-
-        setattr(transport, ORIGINAL_SEND, send)
-        setattr(transport, "send", sending)  # noqa: B010
+        key = self.keys.link()  # attached again: a new key, its sends under it from now
+        if isinstance(transport, SendObservable):
+            transport.observe_sends(self._sending(key))
+            self._observed.append(transport)
 
         def arrived(data: bytes, now: int) -> None:
             self._input("data", key, bytes(data))  # hex: the writer's thread
@@ -422,6 +235,12 @@ class Recorder:
 
         return arrived, closed
 
+    def _sending(self, key: str) -> Callable[[bytes], None]:
+        def sent(data: bytes) -> None:
+            self.writer.add(["send", self.clock.now, key, bytes(data)])  # hex: the writer's
+
+        return sent
+
     def listener(self, listener: Listener, on_connect: ConnectCallback) -> ConnectCallback:
         key = self.keys.listener()
 
@@ -431,50 +250,45 @@ class Recorder:
 
         return connected
 
-    # --- what the binder, the console and the control API tell ----------------------
+    # --- what the binder tells, and the door's commands -------------------------------
 
     def bound(self, groups: Sequence[str]) -> None:
         self._input("bind", sorted(groups))
 
-    def command(self, kind: str, name: str, args: Sequence[object], run: Callable[[], Any]) -> Any:
-        """Run a command (a console line, a control call), recording it and its answer."""
-        if self._depth or self.closed:
-            return run()
-        self._input(kind, *([name] if kind == "line" else [name, list(args)]))
-        label = "console" if kind == "line" else name
-        self._depth += 1
-        try:
-            result = run()
-        except FieldtwinError as exc:
-            self._depth -= 1
-            self._input("ret")
-            self.writer.add(["result", self.clock.now, label, {"error": str(exc)}])
-            raise
-        except BaseException:
-            self._depth -= 1
-            raise
-        self._depth -= 1
+    def watch(self, door: Door) -> None:
+        """See every outermost command of ``door`` (a console line, a control call)."""
+        if self._unwatch is None:
+            self._unwatch = door.watch(self)
+
+    def before(self, command: Command) -> None:
+        if self.closed:
+            return
+        if command.kind == LINE:
+            self._input("line", command.name)
+        else:
+            self._input(command.kind, command.name, list(command.args))
+
+    def after(self, command: Command, answer: object, error: BaseException | None) -> None:
+        """The command returned (``ret``) and what it answered; one that raised something
+        other than a plant error (Ctrl-C) ends the session: nothing more is written."""
+        if self.closed or (error is not None and not isinstance(error, FieldtwinError)):
+            return
+        label = "console" if command.kind == LINE else command.name
         self._input("ret")
-        self.writer.add(["result", self.clock.now, label, plain_json(result)])
-        return result
-
-    def instrument(self, target: object, names: Sequence[str]) -> None:
-        """Record every call of ``target``'s methods ``names`` (the control API's Control)."""
-        for name in names:
-            method = getattr(target, name)
-            setattr(target, name, self._recorded(name, method))
-
-    def _recorded(self, name: str, method: Callable[..., Any]) -> Callable[..., Any]:
-        def call(*args: object) -> Any:
-            return self.command("call", name, args, lambda: method(*args))
-
-        return call
+        result = {"error": str(error)} if error is not None else plain_json(answer)
+        self.writer.add(["result", self.clock.now, label, result])
 
     def close(self) -> None:
         """The end record; the file closed (flushed).  Safe to call twice."""
         if self.closed:
             return
         self.closed = True
+        if self._unwatch is not None:
+            self._unwatch()
+            self._unwatch = None
+        for transport in self._observed:
+            transport.observe_sends(None)
+        self._observed.clear()
         self._chars.close()
         self._sampler.close()
         self.writer.add(["end", self.clock.now, self.clock.fired])

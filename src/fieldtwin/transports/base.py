@@ -10,6 +10,7 @@ Learned from python-can's bus/interface split and httpcore's thin adapters.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import NoReturn, Protocol, runtime_checkable
 
 from fieldtwin.charformat import CharFormat
@@ -57,6 +58,17 @@ class Transport(Protocol):
     def close(self) -> None: ...
 
 
+SendObserver = Callable[[bytes], None]
+
+
+@runtime_checkable
+class SendObservable(Protocol):
+    """A transport that tells one observer every send (a recording, a replay: the
+    runner's attach tap gives it): ``observe_sends(None)`` stops it."""
+
+    def observe_sends(self, observer: SendObserver | None) -> None: ...
+
+
 class Listener(Protocol):
     """A listening socket: ``accept`` hands out connected transports."""
 
@@ -93,6 +105,7 @@ class FdTransport:
         self._out = bytearray()
         # the runner that pumps this transport, told of queued output and of the close
         self.watcher: TransportWatcher | None = None
+        self._sends: SendObserver | None = None  # sees every send (observe_sends)
 
     def __repr__(self) -> str:
         state = "closed" if self.closed else "open"
@@ -106,9 +119,15 @@ class FdTransport:
         if self.closed:
             raise TransportError(f"cannot {what} on {self.name}: it is closed")
 
+    def observe_sends(self, observer: SendObserver | None) -> None:
+        """``observer(data)`` sees every send from now on (None: none any more)."""
+        self._sends = observer
+
     def send(self, data: bytes) -> None:
         """Queue ``data`` and write as much as the kernel takes now."""
         self._check_open("send")
+        if self._sends is not None:
+            self._sends(data)
         if not self._out and len(data) <= READ_CHUNK:
             # nothing queued (the usual case): write at once, queue what is left
             written = self._write_some(data)

@@ -8,6 +8,8 @@ it drains what was already sent, then ``receive`` raises TransportError.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from fieldtwin.errors import TransportError
 
 
@@ -22,6 +24,7 @@ class MemoryTransport:
         self.closed = False
         self._inbox = bytearray()
         self._peer: MemoryTransport | None = None
+        self._sends: Callable[[bytes], None] | None = None  # sees every send
 
     def __repr__(self) -> str:
         return f"<MemoryTransport {self.name} {'closed' if self.closed else 'open'}>"
@@ -33,9 +36,15 @@ class MemoryTransport:
     def flush(self) -> None:
         """Nothing is ever queued: a memory send lands in the peer's inbox at once."""
 
+    def observe_sends(self, observer: Callable[[bytes], None] | None) -> None:
+        """``observer(data)`` sees every send from now on (None: none any more)."""
+        self._sends = observer
+
     def send(self, data: bytes) -> None:
         if self.closed:
             raise TransportError(f"cannot send on {self.name}: it is closed")
+        if self._sends is not None:
+            self._sends(data)
         peer = self._peer
         if peer is None or peer.closed:
             raise TransportError(f"cannot send on {self.name}: the peer has closed")

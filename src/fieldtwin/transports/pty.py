@@ -19,7 +19,6 @@ from __future__ import annotations
 import os
 
 from fieldtwin.transports.base import READ_CHUNK, FdTransport, LineSettings, line_settings
-from fieldtwin.transports.virtualized import current
 
 
 def _apply_speed(fd: int, baud: int) -> None:
@@ -82,9 +81,4 @@ class PtyTransport(FdTransport):
 
 def open_pty(settings: LineSettings | None = None) -> PtyTransport:
     """A new pty; give ``.peer_path`` to whoever plays the other end."""
-    wiring = current()  # a replay opens nothing real
-    if wiring is not None:
-        found = wiring.pty(settings)
-        assert isinstance(found, PtyTransport)
-        return found
     return PtyTransport(settings)

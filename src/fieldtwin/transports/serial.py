@@ -18,7 +18,6 @@ from typing import TYPE_CHECKING
 from fieldtwin.charformat import Parity
 from fieldtwin.errors import TransportError
 from fieldtwin.transports.base import READ_CHUNK, FdTransport, LineSettings, line_settings
-from fieldtwin.transports.virtualized import current
 
 if TYPE_CHECKING:
     import serial as pyserial
@@ -109,9 +108,4 @@ def _is_pty(fd: int) -> bool:
 
 def open_serial(device: str, settings: LineSettings | None = None) -> SerialTransport:
     """Open ``device`` (e.g. /dev/ttyUSB0, or a pty's peer_path) with ``settings``."""
-    wiring = current()  # a replay opens nothing real
-    if wiring is not None:
-        found = wiring.serial(device, settings)
-        assert isinstance(found, SerialTransport)
-        return found
     return SerialTransport(device, settings or line_settings())

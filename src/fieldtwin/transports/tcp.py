@@ -25,7 +25,6 @@ from itertools import islice
 
 from fieldtwin.errors import ConfigError, TransportError
 from fieldtwin.transports.base import AcceptFailed, FdTransport
-from fieldtwin.transports.virtualized import current
 
 CONNECT_TIMEOUT_S = 5.0
 # Open connections per listening endpoint (issue 10 item 1); more are closed at once.
@@ -229,11 +228,6 @@ def listen(
     host: str = "127.0.0.1", port: int = 0, max_connections: int = DEFAULT_MAX_CONNECTIONS
 ) -> TcpListener:
     """Listen on ``host:port``; port 0 picks a free port (see ``.address``)."""
-    wiring = current()  # a replay opens nothing real
-    if wiring is not None:
-        found = wiring.listener(host, port, max_connections)
-        assert isinstance(found, TcpListener)
-        return found
     return TcpListener(host, port, max_connections)
 
 

@@ -2,46 +2,30 @@
 
 ``fieldtwin replay`` rebuilds a recorded plant and binds its ports as the
 recording did, but nothing real may be opened (no port to collide with, no
-device to be missing on another machine).  While a ``Wiring`` is in force
-(``with wiring:``), ``listen``, ``open_pty`` and ``open_serial`` return the
-virtual twins below: they are real transports in everything the plant sees
+device to be missing on another machine).  It hands ``Wiring().backends``
+(fieldtwin.transports.backends) to the binder and to the PLC's host, which open
+the virtual twins below: they are real transports in everything the plant sees
 (``is_real`` stays True, so an RTU line keeps the relaxed timing of a real
-line), but they have no descriptor, never receive, and hand what is sent to
-the wiring's ``sink`` with the transport's key.  The replay runner
-(fieldtwin.runtime.replay) delivers the recorded input bytes itself.
+line), but they have no descriptor and never receive.  The replay runner
+(fieldtwin.runtime.replay) delivers the recorded input bytes itself and sees
+what the plant sends through each transport's ``observe_sends``.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from contextvars import Token
-from types import TracebackType
-
+from fieldtwin.transports.backends import Backends
 from fieldtwin.transports.base import FdTransport, LineSettings, line_settings
 from fieldtwin.transports.pty import PtyTransport
 from fieldtwin.transports.serial import SerialTransport
 from fieldtwin.transports.tcp import DEFAULT_MAX_CONNECTIONS, TcpListener, TcpTransport
-from fieldtwin.transports.virtualized import CURRENT, VirtualEndpoints
-
-Sink = Callable[[str, bytes], None]  # (transport key, bytes sent)
-
-
-def current() -> Wiring | None:
-    """The wiring in force (None: open real endpoints)."""
-    found = CURRENT.get()
-    return found if isinstance(found, Wiring) else None
 
 
 class _Sending(FdTransport):
-    """What every virtual transport shares: a key given by the runner, a sink, no
-    descriptor, nothing ever received (the replay delivers the recorded bytes)."""
-
-    key: str = "?"
-    sink: Sink | None = None
+    """What every virtual transport shares: no descriptor, everything sent taken at
+    once (its observer sees it), nothing ever received (the replay delivers the
+    recorded bytes)."""
 
     def _write(self, data: bytes) -> int:
-        if self.sink is not None:
-            self.sink(self.key, bytes(data))
         return len(data)
 
     def receive(self) -> bytes:
@@ -104,26 +88,12 @@ class VirtualListener(TcpListener):
 
 
 class Wiring:
-    """``with Wiring(sink):`` every endpoint opened inside is virtual."""
+    """The virtual twins of one replay's endpoints (ptys numbered in opening order);
+    ``backends`` opens them."""
 
-    def __init__(self, sink: Sink | None = None) -> None:
-        self.sink = sink
+    def __init__(self) -> None:
         self._count = 0
-        self._token: Token[VirtualEndpoints | None] | None = None
-
-    def __enter__(self) -> Wiring:
-        self._token = CURRENT.set(self)
-        return self
-
-    def __exit__(
-        self,
-        kind: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        if self._token is not None:
-            CURRENT.reset(self._token)
-            self._token = None
+        self.backends = Backends(listen=self.listener, pty=self.pty, serial=self.serial, real=False)
 
     def _number(self) -> int:
         self._count += 1
@@ -146,5 +116,4 @@ __all__ = [
     "VirtualPty",
     "VirtualSerial",
     "Wiring",
-    "current",
 ]
