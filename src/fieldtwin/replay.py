@@ -24,8 +24,8 @@ from fieldtwin.clock import MS
 from fieldtwin.console import Console
 from fieldtwin.control.resources import Control
 from fieldtwin.errors import FieldtwinError
-from fieldtwin.plant import Plant, PlantFile, build_plant, embedded_plant, read_plant
-from fieldtwin.runtime.binder import ALL, bind
+from fieldtwin.plant import PlantFile, build_plant, embedded_plant, read_plant
+from fieldtwin.runtime.binder import ALL
 from fieldtwin.runtime.recfile import RecordingError, extent
 from fieldtwin.runtime.recfile import records as numbered_records
 from fieldtwin.runtime.record import (
@@ -41,28 +41,8 @@ from fieldtwin.runtime.record import (
 )
 from fieldtwin.runtime.replay import Comparer, Feed, ReplayClock, ReplayRunner
 from fieldtwin.runtime.wall import SystemWall
+from fieldtwin.session import CONTROL_COMMANDS, Session
 from fieldtwin.transports.virtual import Wiring
-
-# The control API's commands that are recorded (docs/record.md): every Control method a
-# route calls, except the pure readers (plant, status, LEDs, lists) and console_line,
-# whose console line the console records itself.
-CONTROL_COMMANDS = (
-    "set_input",
-    "set_fault",
-    "read_object",
-    "write_object",
-    "power_cycle",
-    "start_exchange",
-    "exchange",
-    "power_break",
-    "remove",
-    "insert",
-    "pause",
-    "resume",
-    "step",
-    "run_until",
-    "set_speed",
-)
 
 
 @dataclass(frozen=True, slots=True)
@@ -175,18 +155,17 @@ def _play(
     runner.out = out
     with Wiring():
         plant = build_plant(plant_file, runner=runner, speed=header.speed)
-        try:
+        with Session(plant, runner) as session:
+            session.own_ports()  # what the recording binds closes with the plant
             chars = CharsFeed(plant.events, out.append)
             sampler = Sampler(clock, plant.devices, out.append, header.sample_ms * MS)
             control = Control(plant, runner, plant.events)
-            runner.dispatch = _Dispatcher(plant, runner, control, header.console)
+            runner.dispatch = _Dispatcher(session, runner, control, header.console)
             runner.play()
             if feed.end is not None:
                 runner.finish(feed.end[1], feed.end[2])
             chars.close()
             sampler.close()
-        finally:
-            plant.close()
     return runner
 
 
@@ -198,9 +177,10 @@ class _Dispatcher:
     the line (``feed.refuse``): nothing is raised through the plant's own code."""
 
     def __init__(
-        self, plant: Plant, runner: ReplayRunner, control: Control, console: str = "inline"
+        self, session: Session, runner: ReplayRunner, control: Control, console: str = "inline"
     ) -> None:
-        self.plant = plant
+        self.session = session
+        plant = self.plant = session.plant
         self.runner = runner
         self.control = control
         # console lines run as they ran when recorded (the header's console): the
@@ -221,13 +201,10 @@ class _Dispatcher:
                 feed.refuse(line, f"bind: unknown port group(s) {unknown} (allowed: {ALL})")
                 return
             try:
-                binding = bind(
-                    self.plant.devices, self.runner, groups=groups, events=self.plant.events
-                )
+                self.session.bind(groups)
             except FieldtwinError as exc:
                 feed.refuse(line, f"bind: {exc}")
                 return
-            self.plant.bindings.append(binding)
         elif kind == "call":
             name, args = str(record[3]), list(record[4])
             if name not in CONTROL_COMMANDS:
