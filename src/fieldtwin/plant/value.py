@@ -112,6 +112,10 @@ class Plant:
         """The recorder writing what enters and leaves (plant.record), if any."""
         return self.ports.recorder
 
+    @recorder.setter
+    def recorder(self, recorder: Recorder | None) -> None:
+        self.ports.recorder = recorder
+
     def start_endpoints(self, runner: Runner) -> list[str]:
         """Open the TES Modbus endpoints; returns one 'listening: ...' line each."""
         from fieldtwin.runtime.binder import MODBUS
