@@ -3,28 +3,18 @@
 from __future__ import annotations
 
 import argparse
-import gc
 import math
 import os
-import signal
 import sys
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager, suppress
-from dataclasses import replace
 from typing import TYPE_CHECKING, TextIO, cast
 
 from fieldtwin import __version__
-from fieldtwin.clock import S, SimClock
 from fieldtwin.errors import ConfigError, FieldtwinError
 
 if TYPE_CHECKING:
-    from rich.live import Live
-
-    from fieldtwin.control.launch import Launched
     from fieldtwin.plant import Plant
-    from fieldtwin.runtime.binder import Binding
-    from fieldtwin.runtime.events import EventBus
-    from fieldtwin.runtime.runner import Runner
 
 SUPPRESS_SPEED: object = object()  # --speed not given: the plant's [run] speed decides
 # Issue 20 item 9: the exit status when the reader of the output went away (`| head -1`):
@@ -292,213 +282,41 @@ def _main(argv: Sequence[str] | None) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from fieldtwin.live import footer_urls, plain_status, render
-    from fieldtwin.plant import build_plant, plant_speed, read_plant
-    from fieldtwin.runtime.binder import ALL, bind
-    from fieldtwin.runtime.exposure import warnings_for
-    from fieldtwin.runtime.runner import Runner
+    """``fieldtwin run``: the options, to the session that runs them (fieldtwin.session)."""
+    from fieldtwin.plant import FROM_PLANT
+    from fieldtwin.session import ControlOptions, RunOptions, run
 
-    plant_file = read_plant(args.plant)
-    own_speed = plant_speed(plant_file)  # checked even when --speed overrides it
-    speed = own_speed if args.speed is SUPPRESS_SPEED else args.speed
-    clock = SimClock()
-    runner = Runner(clock, speed)
-    stop_on_signals(runner)  # from here on a stop is never lost (issue 20)
-    plant = build_plant(plant_file, runner=runner, speed=speed)
-    plant.events.start()  # the observers' work on a thread of theirs (DESIGN rule 13)
-    control: Launched | None = None
-    try:
-        recorders = _recorders(args, plant.events)  # before any port opens: no frame is missed
-        _start_recording(args, plant, runner, recorders)
-        # the control API starts before any port opens: its imports and its server's start
-        # take a second, and a master connecting at the `running` line must be served
-        control = _start_control(args, plant, runner, plant.events)
-        plant.note_bound(ALL)
-        binding = bind(plant.devices, runner, events=plant.events)  # every port, once built
-    except BaseException:
-        if control is not None:
-            control.close()
-        plant.events.close()
-        plant.close()
-        raise
-    plant.bindings.append(binding)
-    plant.bindings.append(recorders)
-    endpoints = binding.lines
-    for line in endpoints:
-        print(line, flush=True)
-    for warning in warnings_for(endpoints):  # issue 10 item 7
-        print(warning, file=sys.stderr, flush=True)
-    for note in plant.notes:  # e.g. an analog level beyond the converter's span (TES §4.2.4)
-        print(f"fieldtwin: note: {note}", file=sys.stderr, flush=True)
-    print(
-        f"running {plant.title} at {'max speed' if speed is None else f'x{speed:g}'}",
-        flush=True,
+    control = ControlOptions(
+        args.control_host, args.control_port, args.control_token, args.allow_origin
     )
-    if control is not None:  # after the `running` line; the API is up already
-        # one bus for every window onto the plant: the API's stream sees the traffic too
-        # a moved port (8520 busy) is said before the URL lines it corrects
-        for warning in control.warnings:
-            print(warning, file=sys.stderr, flush=True)
-        for line in control.lines:
-            print(line, flush=True)
-    # the plant lives as long as the process: the cyclic collector need not walk its
-    # objects again and again (1000 TES: half the time of an edge; docs/decisions.md)
-    gc.collect()
-    gc.freeze()
-    live = sys.stdout.isatty() and not args.no_live
-    end = None if args.duration is None else clock.now + round(args.duration * S)
-    next_status = [clock.now]
-    urls = [] if control is None else footer_urls(control.lines)  # the live view's footer
-
-    def tick(now: int) -> None:
-        if control is not None:
-            control.observer.sample(now)
-        if end is not None and now >= end:
-            runner.stop()
-        if live_view is not None:
-            live_view.update(render(plant, endpoints, runner, urls))
-        elif args.status_every > 0 and now >= next_status[0]:
-            next_status[0] = now + round(args.status_every * S)
-            print("\n".join(plain_status(plant)), flush=True)
-
-    live_view: Live | None = None
-    try:
-        if live:
-            from rich.live import Live
-
-            view = render(plant, endpoints, runner, urls)
-            with Live(view, refresh_per_second=5) as live_view:
-                runner.run_forever(tick, tick_us=_tick(speed))
-        else:
-            runner.run_forever(tick, tick_us=_tick(speed))
-    finally:
-        if _HAS_TIMER:
-            signal.setitimer(signal.ITIMER_REAL, 0)  # the run ended: no forced stop
-        for number in (signal.SIGTERM, signal.SIGINT):  # closing: a signal cuts it short
-            signal.signal(number, _interrupt)
-        final = [] if live else plain_status(plant)  # the plant as it stopped (issue 10 item 21)
-        if control is not None:
-            control.close()
-        plant.events.close()  # what the observers still hold reaches the files first
-        plant.close()
-    if final:
-        print("\n".join(final), flush=True)
-    print(f"stopped at t = {clock.now / S:.3f} s", flush=True)
-    return 0
-
-
-STOP_GRACE_S = 1.5  # after SIGTERM/SIGINT, the most wall time the run has to end by itself
-
-
-_HAS_TIMER = hasattr(signal, "setitimer") and hasattr(signal, "SIGALRM")  # not on Windows
-
-
-def _interrupt(*_: object) -> None:
-    raise KeyboardInterrupt
-
-
-def stop_on_signals(runner: Runner) -> None:
-    """SIGTERM and SIGINT end the run within STOP_GRACE_S (issue 20, docs/decisions.md
-    "Bounded catch-up and runner modes"): the first asks ``runner.stop()`` (a latch, not
-    lost if it comes before the run starts) and arms a timer; if the run has not ended
-    when it rings (an instant that never ends), or at a second signal, KeyboardInterrupt
-    is raised where the program stands, and the plant is closed on the way out."""
-
-    def stop(*_: object) -> None:
-        if runner.stopping:
-            _interrupt()
-        runner.stop()
-        if _HAS_TIMER:  # POSIX; elsewhere a second Ctrl-C cuts the run short
-            signal.setitimer(signal.ITIMER_REAL, STOP_GRACE_S)
-
-    if _HAS_TIMER:
-        signal.signal(signal.SIGALRM, _interrupt)
-    signal.signal(signal.SIGTERM, stop)
-    signal.signal(signal.SIGINT, stop)
-
-
-def _recorders(args: argparse.Namespace, events: EventBus) -> Binding:
-    """The --trace and --pcap writers, closed (flushed) with the plant."""
-    from fieldtwin.runtime.binder import Binding
-    from fieldtwin.runtime.pcap import PcapWriter
-    from fieldtwin.runtime.trace import TraceWriter
-
-    def report(text: str) -> None:
-        print(f"fieldtwin: {text}", file=sys.stderr, flush=True)
-
-    recorders = Binding()
-    try:
-        if args.trace:
-            recorders.add([], TraceWriter(events, args.trace, report=report).close)
-        if args.pcap:
-            recorders.add([], PcapWriter(events, args.pcap, report=report).close)
-    except BaseException:
-        recorders.close()
-        raise
-    return recorders
-
-
-def _start_recording(
-    args: argparse.Namespace, plant: Plant, runner: Runner, recorders: Binding
-) -> None:
-    """--record FILE: the plant's inputs and outputs from t = 0 (docs/record.md)."""
-    if not args.record:
-        return
-    from fieldtwin.plant import recording_header
-    from fieldtwin.runtime.record import Recorder
-
-    assert plant.source is not None
-    # console lines reach `fieldtwin run` through the control API only, whose console
-    # runs an advance or power break as a runner mode: replayed the same way
-    header = replace(recording_header(plant.source, runner.speed), console="modes")
-    recorder = Recorder(
-        args.record, header, plant.clock, plant.devices, plant.events, runner, door=plant.door
+    options = RunOptions(
+        plant=args.plant,
+        speed=FROM_PLANT if args.speed is SUPPRESS_SPEED else args.speed,
+        duration_s=args.duration,
+        live=not args.no_live,
+        status_every_s=args.status_every,
+        trace=args.trace,
+        pcap=args.pcap,
+        record=args.record,
+        control=None if args.no_control else control,
     )
-    plant.recorder = recorder
-
-    def close() -> None:
-        recorder.close()
-        if recorder.waited is not None:  # docs/record.md: a recording is never cut short
-            print(f"fieldtwin: {recorder.waited}", file=sys.stderr, flush=True)
-
-    recorders.add([], close)
-
-
-def _start_control(
-    args: argparse.Namespace, plant: Plant, runner: Runner, bus: EventBus
-) -> Launched | None:
-    """The control API (docs/control.md), unless --no-control; its lines are printed later."""
-    if args.no_control:
-        return None
-    from fieldtwin.control.launch import launch
-
-    launched = launch(
-        plant,
-        runner,
-        bus,
-        host=args.control_host,
-        port=args.control_port,
-        token=args.control_token,
-        allow_origins=args.allow_origin,
-    )
-    return launched
-
-
-def _tick(speed: float | None) -> int:
-    return 200_000 if speed is None else max(50_000, round(200_000 * speed))
+    return run(options)
 
 
 def _console(args: argparse.Namespace) -> int:
-    from fieldtwin.console import Console, run_script
-    from fieldtwin.plant import FROM_PLANT, load_plant, plant_speed, read_plant
+    from fieldtwin.plant import FROM_PLANT
+    from fieldtwin.session import Session
 
     if args.attach is not None:
         return _attached(args)
     speed = FROM_PLANT if args.speed is SUPPRESS_SPEED else args.speed
-    plant_speed(read_plant(args.plant))  # an invalid [run] speed is reported even with --speed
-    plant = load_plant(args.plant, speed=speed)
-    for note in plant.notes:
-        print(f"fieldtwin: note: {note}", file=sys.stderr, flush=True)
+    with Session.for_console(args.plant, speed) as session:
+        return _console_lines(args, session.plant)
+
+
+def _console_lines(args: argparse.Namespace, plant: Plant) -> int:
+    from fieldtwin.console import Console, run_script
+
     console = Console(plant)
     if args.commands:
         return run_script(console, args.commands, sys.stdout, sys.stderr, "-c")

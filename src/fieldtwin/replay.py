@@ -23,11 +23,11 @@ from typing import Any
 from fieldtwin.clock import MS
 from fieldtwin.console import Console
 from fieldtwin.control.resources import Control
-from fieldtwin.control.sim import COMMANDS, serve
+from fieldtwin.control.sim import serve
 from fieldtwin.errors import FieldtwinError
 from fieldtwin.facade.host import OsHost
-from fieldtwin.plant import Plant, PlantFile, build_plant, embedded_plant, read_plant
-from fieldtwin.runtime.binder import ALL, bind
+from fieldtwin.plant import PlantFile, build_plant, embedded_plant, read_plant
+from fieldtwin.runtime.binder import ALL
 from fieldtwin.runtime.door import Command
 from fieldtwin.runtime.recfile import RecordingError
 from fieldtwin.runtime.record import (
@@ -45,11 +45,8 @@ from fieldtwin.runtime.recstream import extent
 from fieldtwin.runtime.recstream import records as numbered_records
 from fieldtwin.runtime.replay import Comparer, Feed, ReplayClock, ReplayRunner
 from fieldtwin.runtime.wall import SystemWall
-from fieldtwin.transports.backends import REAL, Backends
+from fieldtwin.session import CONTROL_COMMANDS, Session
 from fieldtwin.transports.virtual import Wiring
-
-# The control API's commands that are recorded (docs/record.md): the door's CALL commands.
-CONTROL_COMMANDS = COMMANDS
 
 
 @dataclass(frozen=True, slots=True)
@@ -163,19 +160,18 @@ def _play(
     # nothing real is opened: the binder and the PLC's host open virtual twins
     backends = Wiring().backends
     plant = build_plant(plant_file, runner=runner, speed=header.speed, host=OsHost(backends))
-    try:
+    with Session(plant, runner, backends) as session:
+        session.own_ports()  # what the recording binds closes with the plant
         chars = CharsFeed(plant.events, out.append)
         sampler = Sampler(clock, plant.devices, out.append, header.sample_ms * MS)
         control = Control(plant, runner, plant.events)
         serve(plant.door, control)  # the recorded calls run as the live API ran them
-        runner.dispatch = _Dispatcher(plant, runner, control, header.console, backends)
+        runner.dispatch = _Dispatcher(session, runner, control, header.console)
         runner.play()
         if feed.end is not None:
             runner.finish(feed.end[1], feed.end[2])
         chars.close()
         sampler.close()
-    finally:
-        plant.close()
     return runner
 
 
@@ -187,15 +183,10 @@ class _Dispatcher:
     the line (``feed.refuse``): nothing is raised through the plant's own code."""
 
     def __init__(
-        self,
-        plant: Plant,
-        runner: ReplayRunner,
-        control: Control,
-        console: str = "inline",
-        backends: Backends = REAL,
+        self, session: Session, runner: ReplayRunner, control: Control, console: str = "inline"
     ) -> None:
-        self.plant = plant
-        self.backends = backends
+        self.session = session
+        plant = self.plant = session.plant
         self.runner = runner
         self.control = control
         # console lines run as they ran when recorded (the header's console): the
@@ -216,17 +207,10 @@ class _Dispatcher:
                 feed.refuse(line, f"bind: unknown port group(s) {unknown} (allowed: {ALL})")
                 return
             try:
-                binding = bind(
-                    self.plant.devices,
-                    self.runner,
-                    groups=groups,
-                    events=self.plant.events,
-                    backends=self.backends,
-                )
+                self.session.bind(groups)
             except FieldtwinError as exc:
                 feed.refuse(line, f"bind: {exc}")
                 return
-            self.plant.bindings.append(binding)
         elif kind == "call":
             name, args = str(record[3]), list(record[4])
             if name not in CONTROL_COMMANDS:
