@@ -15,6 +15,7 @@ from fieldtwin.errors import ConfigError, FieldtwinError
 
 if TYPE_CHECKING:
     from fieldtwin.plant import Plant
+    from fieldtwin.runtime.runner import Runner
 
 SUPPRESS_SPEED: object = object()  # --speed not given: the plant's [run] speed decides
 # Issue 20 item 9: the exit status when the reader of the output went away (`| head -1`):
@@ -380,3 +381,11 @@ def _attached(args: argparse.Namespace) -> int:
 
 if __name__ == "__main__":
     sys.exit(main())
+
+
+def stop_on_signals(runner: Runner) -> None:
+    """SIGTERM/SIGINT end the run (kept here for callers of ``fieldtwin.cli``; the
+    handler lives with the session)."""
+    from fieldtwin.session import stop_on_signals as install
+
+    install(runner)
