@@ -94,6 +94,7 @@ def module_panel(device: ModuleDevice, plc: Plc, ident: str) -> Json:
     has_inputs = module.shows_i_bits
     has_outputs = module.shows_o_bits
     details = dict(status.details)
+    inputs = device.inputs()
     out: Json = {
         "id": ident,
         "kind": status.kind,
@@ -113,8 +114,8 @@ def module_panel(device: ModuleDevice, plc: Plc, ident: str) -> Json:
         "details": details,
         "decoded": _decoded(panel),
         "panel": panel_json(panel),
-        "inputs": list(device.inputs()),
-        "input_kinds": {name: i.description for name, i in device.inputs().items()},
+        "inputs": list(inputs),
+        "input_kinds": {name: i.description for name, i in inputs.items()},
         "faults": [fault_json(f) for f in device.faults().values()],
         "active_faults": [f.text() for f in status.active_faults],
         "outputs": [output_json(o) for o in status.outputs],
@@ -172,6 +173,7 @@ def device_panel(device: Device, ident: str) -> Json:
     counters, analog values in volts or milliamps and points, watchdog)."""
     status = device.status()
     address = device.address
+    inputs = device.inputs()
     parts = {k: int(v) if v.isdigit() else v for k, v in address.columns}
     out: Json = {
         "id": ident,
@@ -182,8 +184,8 @@ def device_panel(device: Device, ident: str) -> Json:
         "state": status.state,
         "leds": [[name, state] for name, state in status.leds],
         "status": dict(status.details).get("status", ""),
-        "input_names": list(device.inputs()),
-        "input_kinds": {name: i.description for name, i in device.inputs().items()},
+        "input_names": list(inputs),
+        "input_kinds": {name: i.description for name, i in inputs.items()},
         "faults": [fault_json(f) for f in device.faults().values()],
         "active_faults": [f.text() for f in status.active_faults],
         "outputs_driven": [output_json(o) for o in status.outputs],
