@@ -34,9 +34,9 @@ from fieldtwin.console_syntax import (
 )
 from fieldtwin.console_trace import USAGE as TRACE_USAGE
 from fieldtwin.console_trace import ConsoleTrace
-from fieldtwin.devices.face import Device, DeviceStatus, ModuleAddress
+from fieldtwin.devices.face import Device, DeviceStatus, Family, device_id
 from fieldtwin.errors import ConfigError, FieldtwinError
-from fieldtwin.live import tes_line
+from fieldtwin.live import device_line
 from fieldtwin.plant import Plant
 from fieldtwin.runtime.door import Command
 from fieldtwin.signals.spec import file_in_spec
@@ -306,12 +306,20 @@ class Console:
     # --- devices: one set of verbs for a module and a TES (the Device face) ----------
 
     def _module(self, token: str) -> Device:
+        """A module by its address (``5``, ``23``), or any device by its id in the
+        control API (``tes1``, ``tes1@2``): the verbs are the same for every device."""
+        devices = self.plant.devices
+        for device in devices:
+            if device_id(device, devices) == token.strip():
+                return device
         rack, slot = module_address(token)
         return self.plant.module_device(rack, slot)
 
     def _status(self, args: list[str]) -> list[str]:
         if self.plant.plc is None and not args:
             return [self._time(), *self._tes_status()]
+        if args and (device := self._module(args[0])).family != Family.MODULE:
+            return device_status(device)
         plc = self.plc
         modules = (
             [self._module(args[0])]
@@ -321,19 +329,21 @@ class Console:
         lines = [f"PLC {plc.model.name} {plc.mode}  {self._time()}"]
         if plc.fault is not None:
             lines.append(f"fault: {plc.fault}")
+        slots = {
+            id(self.plant.module_device(m.rack, m.slot)): (m.rack, m.slot) for m in plc.modules
+        }
         for device in modules:
             lines.append("")
             status = device.status()
             lines.extend(f"{key}: {value}" for key, value in status.details)
             lines.extend(fault_and_output_lines(status))
-            address = device.address
-            assert isinstance(address, ModuleAddress)
-            rack, slot = address.rack, address.slot
+            rack, slot = slots[id(device)]
             iw = " ".join(format_hex(w) for w in plc.image(rack, slot).iw)
             ow = " ".join(format_hex(w) for w in plc.output_words(rack, slot))
             lines.append(f"IW: {iw}")
             lines.append(f"OW: {ow}")
             lines.append(f"I: {plc.image(rack, slot).i_bits:016b} (F..0)")
+            lines.extend(device.panel().lines())
         if not args and self.plant.tes_devices:
             lines.extend(["", *self._tes_status()])
         return lines
@@ -403,7 +413,8 @@ class Console:
         return [f"PLC {self.plc.mode}{done}", *fault]
 
     def _tes_status(self) -> list[str]:
-        return [tes_line(d) for d in self.plant.tes_devices]
+        """One line per device outside the PLC's rack (every TES), from its face."""
+        return [device_line(d) for d in self.plant.devices if d.family != Family.MODULE]
 
     # --- TES -------------------------------------------------------------------------
 
@@ -461,7 +472,7 @@ class Console:
         "signal": (2, 64, lambda c, d, h, r: set_signal(d, f"{h} signal", r, c.files)),
         "fault": (2, 9, lambda c, d, h, r: set_fault(d, f"{h} fault", r)),
         "faults": (0, 0, lambda c, d, h, r: list_faults(d)),
-        "status": (0, 0, lambda c, d, h, r: [tes_line(d)]),
+        "status": (0, 0, lambda c, d, h, r: device_status(d)),
         "outputs": (0, 0, lambda c, d, h, r: list_outputs(d)),
         "leds": (0, 0, lambda c, d, h, r: [d.status().leds_text()]),
         "power-cycle": (0, 0, lambda c, d, h, r: c._tes_power_cycle(d, h, r)),
@@ -538,6 +549,15 @@ def list_faults(device: Device) -> list[str]:
 def list_outputs(device: Device) -> list[str]:
     """``a4 = 4.500V (H'3FFF')``: every output the device drives, in its units."""
     return [f"{o.name} = {o.read().text()}" for o in device.outputs().values()] or ["(none)"]
+
+
+def device_status(device: Device) -> list[str]:
+    """A device outside the rack: its line, then (when it is on) its faults in force,
+    its outputs and its typed front panel (bit rows, words, readings, frozen values)."""
+    status = device.status()
+    if status.state == "off":
+        return [device_line(device)]
+    return [device_line(device), *fault_and_output_lines(status), *device.panel().lines()]
 
 
 def fault_and_output_lines(status: DeviceStatus) -> list[str]:

@@ -20,7 +20,7 @@ from rich.table import Table
 from rich.text import Text
 
 from fieldtwin.clock import S
-from fieldtwin.devices.face import Device, DeviceStatus, ModuleAddress, TesAddress
+from fieldtwin.devices.face import Device, DeviceStatus, Family, reading_text
 from fieldtwin.errors import FieldtwinError
 from fieldtwin.plant import Plant
 from fieldtwin.runtime.runner import Runner
@@ -97,9 +97,12 @@ def _render(plant: Plant, endpoints: list[str], width: int, runner: Runner | Non
         parts.append(_modules(plant, _module_devices(plant), title, width))
         if plc.program is not None:
             parts.append(Text(program_line(plc), "green", overflow="fold"))
-    tes = [d for d in plant.devices if isinstance(d.address, TesAddress)]
-    if tes:
-        parts.append(_tes_table(tes, width))
+    for family, devices in _families(plant).items():
+        parts.append(_family_table(family, devices, width))
+        if width >= MEDIUM:  # each one's front (bit rows, words, readings) beneath
+            parts.extend(_fronts(devices))
+    if width >= WIDE:
+        parts.extend(_fronts([d for _, _, d in _module_devices(plant)], readings_only=True))
     parts.extend(Text(line, "cyan", overflow="fold") for line in endpoints)
     parts.append(Text("Ctrl-C to stop", "dim"))
     return Group(*parts)
@@ -116,7 +119,7 @@ def _table(title: str, width: int) -> Table:
     )
 
 
-def _modules(plant: Plant, modules: list[Device], title: str, width: int) -> Table:
+def _modules(plant: Plant, modules: list[tuple[int, int, Device]], title: str, width: int) -> Table:
     table = _table(title, width)
     wide, medium = width >= WIDE, MEDIUM <= width < WIDE
     leds = ["OK", "ERR", "F"] if wide else ["LEDs"]
@@ -130,9 +133,8 @@ def _modules(plant: Plant, modules: list[Device], title: str, width: int) -> Tab
     for col in ("slot", "module", "mode", *leds, "I,S", words, *bit_columns):
         table.add_column(col, no_wrap=True)
     assert plant.plc is not None
-    for device in modules:
+    for rack, slot, device in modules:
         status = device.status()
-        rack, slot = _rack_slot(device)
         image = plant.plc.image(rack, slot)
         iw = [f"{w:04X}" for w in image.iw]
         shown = " ".join(iw) if wide or medium else " ".join(iw[:4]) + "\n" + " ".join(iw[4:])
@@ -191,18 +193,26 @@ def output_bits(plc: Plc, rack: int, slot: int) -> int:
     return value
 
 
-def _tes_table(devices: list[Device], width: int) -> Table:
-    table = _table("TES remote I/O", width)
-    for col in ("endpoint", "slave", "model", "status", "LEDs"):
-        table.add_column(col, no_wrap=col != "endpoint", overflow="fold")
+def _families(plant: Plant) -> dict[Family, list[Device]]:
+    """Every device outside the PLC's rack (a TES...), by family, in file order."""
+    found: dict[Family, list[Device]] = {}
+    for device in plant.devices:
+        if device.family != Family.MODULE:
+            found.setdefault(device.family, []).append(device)
+    return found
+
+
+def _family_table(family: Family, devices: list[Device], width: int) -> Table:
+    """One row per device of a family: its address as its columns, kind, state, LEDs."""
+    table = _table(family.title or family.what, width)
+    columns = [name for name, _ in devices[0].address.columns]
+    for col in (*columns, family.key, "status", "LEDs"):
+        table.add_column(col, no_wrap=col not in columns[:1], overflow="fold")
     for device in devices:
-        address = device.address
-        assert isinstance(address, TesAddress)
         status = device.status()
         word = dict(status.details).get("status", "")
         table.add_row(
-            address.endpoint,
-            str(address.slave),
+            *(value for _, value in device.address.columns),
             _kind(status),
             f"{status.state} {word}".strip(),
             _leds(status),
@@ -210,17 +220,32 @@ def _tes_table(devices: list[Device], width: int) -> Table:
     return table
 
 
-def _module_devices(plant: Plant) -> list[Device]:
-    """Every module in the PLC's slots (one inserted from Python too), in slot order."""
+def _fronts(devices: list[Device], readings_only: bool = False) -> list[Text]:
+    """``TES 1 front:  in: 0000...  readings: a0=2.000V``: each device's typed
+    front panel (Device.panel()) on a line of its own; nothing for an empty front."""
+    out = []
+    for device in devices:
+        panel = device.panel()
+        if readings_only:
+            lines = (
+                ["readings: " + " ".join(map(reading_text, panel.readings))]
+                if panel.readings
+                else []
+            )
+        else:
+            lines = panel.lines()
+        if lines:
+            head = f"{device.address.label} front:  "
+            out.append(Text(head + "  ".join(lines), "dim", overflow="fold"))
+    return out
+
+
+def _module_devices(plant: Plant) -> list[tuple[int, int, Device]]:
+    """Every module in the PLC's slots (one inserted from Python too), in slot order,
+    with its rack and slot."""
     if plant.plc is None:
         return []
-    return [plant.module_device(m.rack, m.slot) for m in plant.plc.modules]
-
-
-def _rack_slot(device: Device) -> tuple[int, int]:
-    address = device.address
-    assert isinstance(address, ModuleAddress)
-    return address.rack, address.slot
+    return [(m.rack, m.slot, plant.module_device(m.rack, m.slot)) for m in plant.plc.modules]
 
 
 def _led(name: str, state: str) -> Text:
@@ -245,16 +270,20 @@ def mode(status: DeviceStatus) -> str:
     return status.mode if status.mode is not None else status.state
 
 
-def tes_line(device: Device) -> str:
-    """``TES 1 TES 32EST: on  status H'0009'  Pwr=on ...  at tcp://...``: one TES, one line."""
+def device_line(device: Device) -> str:
+    """``TES 1 TES 32EST: on  status H'0009'  Pwr=on ...  at tcp://...``: one device
+    outside the rack, one line, from its face (its address's label and place)."""
     address = device.address
-    assert isinstance(address, TesAddress)
     status = device.status()
-    head = f"TES {address.slave} {status.kind}: "
+    head = f"{address.label} {status.kind}: "
     if status.state == "off":
-        return f"{head}off  at {address.endpoint}"
+        return f"{head}off  at {address.where}"
     word = dict(status.details).get("status", "")
-    return f"{head}on  status {word}  {status.leds_text()}  at {address.endpoint}"
+    shown = f"status {word}  " if word else ""
+    return f"{head}{status.state}  {shown}{status.leds_text()}  at {address.where}"
+
+
+tes_line = device_line  # its former name
 
 
 def _speed(plant: Plant) -> str:
@@ -276,10 +305,9 @@ def plain_status(plant: Plant) -> list[str]:
     """One line per device: for logs and non-terminal output."""
     lines = [f"t = {plant.clock.now / S:.3f} s"]
     plc = plant.plc
-    for device in _module_devices(plant):
+    for rack, slot, device in _module_devices(plant):
         assert plc is not None
         status = device.status()
-        rack, slot = _rack_slot(device)
         words = " ".join(f"H'{w:04X}'" for w in plc.image(rack, slot).iw)
         lines.append(
             f"slot {status.address} {status.kind}: {mode(status)} {status.leds_text()} IW {words}"
@@ -288,9 +316,9 @@ def plain_status(plant: Plant) -> list[str]:
     if plc is not None and plc.program is not None:
         lines.append(program_line(plc))
     lines.extend(
-        tes_line(d) + faults_note(d.status())
-        for d in plant.devices
-        if isinstance(d.address, TesAddress)
+        device_line(d) + faults_note(d.status())
+        for devices in _families(plant).values()
+        for d in devices
     )
     return lines
 

@@ -105,3 +105,18 @@ def test_the_made_up_device_on_the_dashboard(page: Any, plant: Running) -> None:
     page.wait_for_function(
         "document.querySelector('#mod-3 [data-aout=\"0\"]').textContent === '4.500 V'"
     )
+
+
+def test_its_front_is_drawn_from_its_typed_panel(page: Any, plant: Running) -> None:
+    # no layout of its own: the page draws its Device.panel() (reading, unit, flags, fields)
+    open_dashboard(page, plant)
+    reading = "#mod-3 [data-reading=level]"
+    page.wait_for_function(
+        f"/^2\\.0[0-9]0 V$/.test(document.querySelector('{reading}')?.textContent)"
+    )
+    assert page.locator("#mod-3 [data-field=loop]").inner_text() == "4-20"
+    _put(plant, "/devices/3/faults/float_stuck", {"active": True})
+    flags = "#mod-3 [data-flags=level]"
+    page.wait_for_function(f"document.querySelector('{flags}').textContent === 'float_stuck'")
+    _put(plant, "/devices/3/faults/float_stuck", {"active": False})
+    page.wait_for_function(f"document.querySelector('{flags}').textContent === ''")

@@ -26,6 +26,7 @@ from fieldtwin.devices.face import (
     Family,
     Fault,
     FaultParam,
+    FrontPanel,
     Input,
     InputValue,
     Output,
@@ -33,6 +34,7 @@ from fieldtwin.devices.face import (
     Port,
     PortKind,
     Publish,
+    Reading,
     SignalSpec,
     Stream,
     applicable,
@@ -139,6 +141,17 @@ class LevelDevice(ModuleDevice):
 
     def _noise_state(self) -> Mapping[str, FaultParam] | None:
         return {"mv": self.level.noise_mv} if self.level.noise_mv else None
+
+    def panel(self) -> FrontPanel:
+        """Its LEDs, the level it measures (volts, flagged while the float is stuck)
+        and the loop's noise: no window has a layout for it, each draws this."""
+        mv = self.level.iw[1]
+        stuck = ("float_stuck",) if self.level.fault_active(FLOAT_STUCK) else ()
+        return FrontPanel(
+            self.leds(),
+            readings=(Reading("level", mv / 1000, "V", stuck, f"{mv} mV"),),
+            fields=(("loop", self.loop or "not wired"), ("noise_mv", self.level.noise_mv)),
+        )
 
     def outputs(self) -> Mapping[str, Output]:
         return {"0": Output("0", "analog, V (the valve)", self._valve)}

@@ -13,7 +13,7 @@ peeks: nothing it reads has a side effect (a TES's memorized inputs stay).
 from __future__ import annotations
 
 from fieldtwin.control.resources import Control, fault_json, output_json
-from fieldtwin.devices.face import Device, FrontPanel, Logged, Reading, TesAddress
+from fieldtwin.devices.face import Device, Family, FrontPanel, Logged, Reading
 from fieldtwin.devices.module import ModuleDevice
 from fieldtwin.errors import FieldtwinError
 from fieldtwin.tsx.plc import Plc
@@ -33,17 +33,22 @@ def panels(control: Control) -> Json:
         for m in plc.modules:
             device = plant.module_device(m.rack, m.slot)
             modules.append(module_panel(device, plc, ids.get(id(device), str(device.address))))
-    tes = [
-        tes_panel(d, ids.get(id(d), str(d.address)), plant.clock.now)
-        for d in plant.devices
-        if isinstance(d.address, TesAddress)
-    ]
+    # every device outside the rack, by family, under the family's name ("tes"):
+    # drawn from its face alone, whatever its kind
+    families: dict[str, list[Json]] = {Family.TES.value: []}
+    titles: dict[str, str] = {Family.TES.value: Family.TES.title}
+    for d in plant.devices:
+        if d.family != Family.MODULE:
+            titles.setdefault(d.family.value, d.family.title or d.family.what)
+            entry = device_panel(d, ids.get(id(d), str(d.address)))
+            families.setdefault(d.family.value, []).append(entry)
     return {
         "title": plant.title,
         "clock": control.clock_json(),
         "plc": None if plc is None else plc_panel(plc),
         "modules": modules,
-        "tes": tes,
+        **families,
+        "families": [{"key": key, "title": title} for key, title in titles.items()],
     }
 
 
@@ -89,6 +94,7 @@ def module_panel(device: ModuleDevice, plc: Plc, ident: str) -> Json:
     has_inputs = module.shows_i_bits
     has_outputs = module.shows_o_bits
     details = dict(status.details)
+    inputs = device.inputs()
     out: Json = {
         "id": ident,
         "kind": status.kind,
@@ -108,7 +114,8 @@ def module_panel(device: ModuleDevice, plc: Plc, ident: str) -> Json:
         "details": details,
         "decoded": _decoded(panel),
         "panel": panel_json(panel),
-        "inputs": list(device.inputs()),
+        "inputs": list(inputs),
+        "input_kinds": {name: i.description for name, i in inputs.items()},
         "faults": [fault_json(f) for f in device.faults().values()],
         "active_faults": [f.text() for f in status.active_faults],
         "outputs": [output_json(o) for o in status.outputs],
@@ -159,29 +166,29 @@ def panel_json(panel: FrontPanel) -> Json:
     }
 
 
-def _names(device: Device) -> dict[str, str]:
-    """A TES word's map name -> its address (``direct[0]`` -> ``H'005'``)."""
-    found = {}
-    for entry in device.objects().names():
-        found[entry.name] = entry.address
-    return found
-
-
-def tes_panel(device: Device, ident: str, now: int) -> Json:
-    """One TES's front: LEDs, every input and output, counters, analog, watchdog."""
+def device_panel(device: Device, ident: str) -> Json:
+    """One device outside the rack (a TES...), from its face: its address as its parts
+    (``endpoint``, ``slave``), LEDs, faults, outputs, the typed front; and, from the
+    front's named rows, words and values, what a TES's page draws (inputs, outputs,
+    counters, analog values in volts or milliamps and points, watchdog)."""
     status = device.status()
     address = device.address
-    assert isinstance(address, TesAddress)
+    inputs = device.inputs()
+    parts = {k: int(v) if v.isdigit() else v for k, v in address.columns}
     out: Json = {
         "id": ident,
         "kind": status.kind,
-        "slave": address.slave,
-        "endpoint": address.endpoint,
+        "label": address.label,
+        "where": address.where,
+        **parts,
         "state": status.state,
         "leds": [[name, state] for name, state in status.leds],
         "status": dict(status.details).get("status", ""),
+        "input_names": list(inputs),
+        "input_kinds": {name: i.description for name, i in inputs.items()},
         "faults": [fault_json(f) for f in device.faults().values()],
         "active_faults": [f.text() for f in status.active_faults],
+        "outputs_driven": [output_json(o) for o in status.outputs],
         # every analog output in the device's units (volts, milliamps), the word beside
         "analog_outputs": [output_json(o) for o in status.outputs if not isinstance(o.value, bool)],
     }
@@ -195,7 +202,7 @@ def tes_panel(device: Device, ident: str, now: int) -> Json:
         "inputs": list(panel.row("in")),
         "outputs": list(panel.row("out")),
         "counters": [
-            {"input": int(c.name), "rise": c.value, **{k: v for k, v in c.more}}
+            {"input": int(c.name) if c.name.isdigit() else c.name, "rise": c.value, **dict(c.more)}
             for c in panel.frozen
         ],
         "analog": [
@@ -212,4 +219,9 @@ def tes_panel(device: Device, ident: str, now: int) -> Json:
     }
 
 
-__all__ = ["LAST_MESSAGES", "module_panel", "panels", "plc_panel", "tes_panel"]
+def tes_panel(device: Device, ident: str, now: int = 0) -> Json:
+    """One TES's front (its former name; ``now`` is not used)."""
+    return device_panel(device, ident)
+
+
+__all__ = ["LAST_MESSAGES", "device_panel", "module_panel", "panels", "plc_panel", "tes_panel"]

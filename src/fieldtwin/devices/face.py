@@ -21,6 +21,7 @@ from typing import ClassVar, Protocol
 from fieldtwin.charformat import CharFormat
 from fieldtwin.errors import ConfigError
 from fieldtwin.modbus.model import Link, SlaveDevice
+from fieldtwin.words import format_hex
 
 InputValue = bool | float | str  # a contact, a value in the input's unit, or console text
 SignalSpec = Mapping[str, object]  # a plant-file signal table: { kind = "sine", ... }
@@ -41,6 +42,7 @@ class Family:
     table: str
     key: str
     what: str
+    title: str = ""  # how the live view heads the family's table ("TES remote I/O")
 
     MODULE: ClassVar[Family]  # a TSX intelligent module in a rack slot
     TES: ClassVar[Family]  # a Leroy TES remote I/O terminal on a Modbus endpoint
@@ -50,7 +52,7 @@ class Family:
 
 
 Family.MODULE = Family("module", "module", "type", "module type")
-Family.TES = Family("tes", "tes", "model", "TES model")
+Family.TES = Family("tes", "tes", "model", "TES model", "TES remote I/O")
 
 
 class Address(Protocol):
@@ -59,10 +61,22 @@ class Address(Protocol):
     ``text`` is how the console writes it (``5``, ``23``, ``tcp://127.0.0.1:5020 1``);
     ``key`` orders and identifies it; ``selects(token)`` says whether a user's token
     names it; ``ident(peers)`` is its id in the control API among the addresses of
-    every device of the plant (``5``, ``tes1``, ``tes1@2``)."""
+    every device of the plant (``5``, ``tes1``, ``tes1@2``).  ``label`` names the
+    device in a one-line status (``slot 5``, ``TES 1``), ``where`` says where it is
+    reached (``rack 0``, ``tcp://127.0.0.1:5020``), ``columns`` gives the address as
+    a table's columns (``(("endpoint", ...), ("slave", "1"))``)."""
 
     @property
     def text(self) -> str: ...
+
+    @property
+    def label(self) -> str: ...
+
+    @property
+    def where(self) -> str: ...
+
+    @property
+    def columns(self) -> tuple[tuple[str, str], ...]: ...
 
     @property
     def key(self) -> tuple[object, ...]: ...
@@ -90,6 +104,18 @@ class ModuleAddress:
     def key(self) -> tuple[object, ...]:
         return ("module", self.rack, self.slot)
 
+    @property
+    def label(self) -> str:
+        return f"slot {self}"
+
+    @property
+    def where(self) -> str:
+        return f"rack {self.rack}"
+
+    @property
+    def columns(self) -> tuple[tuple[str, str], ...]:
+        return (("slot", str(self)),)
+
     def selects(self, token: str) -> bool:
         return token.strip() == str(self)
 
@@ -115,6 +141,18 @@ class TesAddress:
     @property
     def key(self) -> tuple[object, ...]:
         return ("tes", self.endpoint, self.slave)
+
+    @property
+    def label(self) -> str:
+        return f"TES {self.slave}"
+
+    @property
+    def where(self) -> str:
+        return self.endpoint
+
+    @property
+    def columns(self) -> tuple[tuple[str, str], ...]:
+        return (("endpoint", self.endpoint), ("slave", str(self.slave)))
 
     def selects(self, token: str) -> bool:
         return " ".join(token.split()) == str(self)
@@ -583,6 +621,45 @@ class FrontPanel:
 
     def word(self, name: str) -> int | None:
         return next((w.value for w in self.words if w.name == name), None)
+
+    def lines(self) -> list[str]:
+        """The front as text, one line per part, for the console and the live view:
+        ``in: 0000000000001000 (15..0)``, ``watchdog: H'0000'``, ``readings: 0=2.000V
+        1=- [overflow]``, ``frozen: 0=3rises``, ``log: 2 items, newest ...``.  The
+        LEDs and the fields are left to the status line and the details."""
+        out = [
+            f"{r.name}: {''.join('1' if b else '0' for b in reversed(r.bits))}"
+            f" ({len(r.bits) - 1}..0)"
+            for r in self.bits
+            if r.bits
+        ]
+        out.extend(
+            f"{w.name}: {'-' if w.value is None else format_hex(w.value & 0xFFFF)}"
+            for w in self.words
+        )
+        if self.readings:
+            out.append("readings: " + " ".join(reading_text(r) for r in self.readings))
+        if self.frozen:
+            out.append("frozen: " + " ".join(reading_text(r) for r in self.frozen))
+        if self.log:
+            newest = self.log[0]
+            out.append(f"log: {len(self.log)} shown, newest {newest.stamp} {newest.text}")
+        return out
+
+
+def reading_text(reading: Reading) -> str:
+    """``0=2.000V``, ``3=12 rises``, ``1=- [inhibited]``, ``2=11.2 [overflow]``: a
+    unit of a word or more stands apart."""
+    value = reading.value
+    unit = reading.unit if len(reading.unit) <= 2 else f" {reading.unit}"
+    if value is None:
+        shown = "-"
+    elif isinstance(value, float):
+        shown = f"{value:.3f}{unit}"
+    else:
+        shown = f"{value}{unit}"
+    flags = f" [{','.join(reading.flags)}]" if reading.flags else ""
+    return f"{reading.name}={shown}{flags}"
 
 
 def watching(publish: Publish) -> Callable[[], bool]:

@@ -186,7 +186,35 @@ function decodedHtml(m) {
     }).join("");
     return `<div class="decoded"><div>${esc(d.activity)}</div><table class="msgs">${rows}</table></div>`;
   }
-  return "";
+  return frontHtml(m.panel); // a kind without a layout of its own: its typed front, as it is
+}
+
+function frontHtml(p) {
+  // any device's typed front panel (Device.panel()): bit rows, words, readings with unit and
+  // flags, frozen values, fields, log; the LEDs are drawn with the head
+  if (!p) return "";
+  const value = (r) => r.value === null || r.value === undefined ? "-"
+    : typeof r.value === "number" && !Number.isInteger(r.value) ? r.value.toFixed(3) : String(r.value);
+  const readings = (title, list, what) => list.length ? `<table class="meas"><tr><th>${title}</th><th>value</th><th>flags</th><th></th></tr>` +
+    list.map((r) => `<tr><td>${esc(r.name)}</td><td data-${what}="${esc(r.name)}">${esc(value(r))} ${esc(r.unit)}</td>
+      <td class="${r.flags.length ? "alarm" : ""}" data-flags="${esc(r.name)}">${esc(r.flags.join(", "))}</td><td>${esc(r.text)}</td></tr>`).join("") + "</table>" : "";
+  const rows = p.bits.map((r) => `<div class="bits" data-row="${esc(r.name)}"><span class="lbl">${esc(r.name)}</span>` +
+    r.bits.map((on, i) => [on, i]).reverse().map(([on, i]) => `<span class="bit ${on ? "on" : ""}" title="${esc(r.name)} ${i} = ${on ? 1 : 0}">${i}</span>`).join("") + "</div>").join("");
+  const words = p.words.length ? `<table class="words"><tr><th>word</th><th>hex</th><th>dec</th></tr>` +
+    p.words.map((w) => `<tr><td>${esc(w.name)}</td><td data-word="${esc(w.name)}">${w.value === null ? "-" : "H'" + (w.value & 0xffff).toString(16).toUpperCase().padStart(4, "0") + "'"}</td><td>${w.value ?? "-"}</td></tr>`).join("") + "</table>" : "";
+  const fields = Object.entries(p.fields || {});
+  const facts = fields.length ? `<div class="muted front-fields">${fields.map(([k, v]) => `${esc(k)} <b data-field="${esc(k)}">${esc(String(v))}</b>`).join(" · ")}</div>` : "";
+  const log = p.log.length ? `<table class="msgs"><tr><th>time stamp</th><th>logged</th></tr>` +
+    p.log.slice(0, 8).map((x) => `<tr><td>${esc(x.stamp)}</td><td>${esc(x.what)}</td></tr>`).join("") + "</table>" : "";
+  return `<div class="decoded front">${facts}${rows}${words}${readings("reading", p.readings, "reading")}${readings("frozen", p.frozen, "frozen")}${log}</div>`;
+}
+
+function deviceHtml(d) { // a device outside the rack of a family without a layout of its own
+  const head = `<div class="head"><b>${esc(d.label)}</b> <span class="kind">${esc(d.kind)}</span>
+    <span class="state" data-f="state">${esc(d.state)} ${esc(d.status)}</span></div>
+    <div class="muted">${esc(d.where)}</div>`;
+  const leds = `<div class="leds">${d.leds.map(([n, s]) => led(n, s)).join("")}</div>`;
+  return head + faultNote(d) + leds + frontHtml(d.panel) + analogOutputsHtml(d.analog_outputs);
 }
 
 function tesHtml(t) {
@@ -218,8 +246,10 @@ function controlsFor(kind, dev, ident) {
   const box = el("details", { class: "ctl" }, el("summary", {}, "controls"));
   const msg = el("span", { class: "msg" });
   const base = `/devices/${encodeURIComponent(ident)}`;
-  const inputs = kind === "tes" ? dev.analog.map((a) => a.input).concat(dev.inputs.map((_, i) => String(i))) : dev.inputs;
-  const analog = (name) => kind === "tes" ? name.startsWith("a") : dev.kind.startsWith("TSX AEM");
+  const inputs = kind === "tes" ? dev.analog.map((a) => a.input).concat(dev.inputs.map((_, i) => String(i)))
+    : kind === "module" ? dev.inputs : dev.input_names || [];
+  const analog = (name) => kind === "tes" ? name.startsWith("a")
+    : dev.kind.startsWith("TSX AEM") || /^analog/.test((dev.input_kinds || {})[name] || "");
   const discrete = (name) => !analog(name) && !dev.kind.startsWith("TSX SCM");
   for (const name of inputs) {
     const row = el("div", { class: "input-row", "data-input": name }, el("span", { class: "lbl" }, `in ${name}`));
@@ -344,7 +374,7 @@ function ensurePanel(container, kind, dev) {
   let panel = panels.get(`${kind}:${dev.id}`);
   if (!panel) {
     const display = el("div", { class: "display" });
-    const root = el("article", { class: `panel ${kind}`, id: `${kind === "tes" ? "tes" : "mod"}-${dev.id}` }, display);
+    const root = el("article", { class: `panel ${kind}`, id: `${kind === "module" ? "mod" : kind}-${dev.id}` }, display);
     root.append(controlsFor(kind, dev, dev.id));
     container.append(root);
     panel = { root, display, html: "" };
@@ -382,6 +412,20 @@ function draw(state) {
     const html = tesHtml(t);
     if (html !== panel.html) { panel.display.innerHTML = html; panel.html = html; }
     syncFaults(panel, t);
+  }
+  for (const family of state.families || []) { // a family of devices with no layout of its own
+    if (family.key === "tes") continue;
+    let list = document.getElementById(`family-${family.key}`);
+    if (!list) {
+      list = el("div", { class: "grid", id: `family-${family.key}` });
+      document.getElementById("tes").after(el("section", {}, el("h2", {}, family.title), list));
+    }
+    for (const d of state[family.key] || []) {
+      const panel = ensurePanel(list, family.key, d);
+      const html = deviceHtml(d);
+      if (html !== panel.html) { panel.display.innerHTML = html; panel.html = html; }
+      syncFaults(panel, d);
+    }
   }
   trends.sample(state);
 }
