@@ -57,7 +57,13 @@ def serve_group(runner: Runner, endpoint: Endpoint, slaves: Sequence[ModbusSlave
         listener = listen(endpoint.host, endpoint.port)
         return serve_rtu_over_tcp(runner, listener, devices, settings, link, wire_timing=wire)
     if endpoint.scheme == "pty":
-        return serve_rtu(runner, open_pty(settings), devices, link, settings, wire_timing=wire)
+        # a UART at the TES's settings reads the master's (issue 23); false on any TES: off
+        strict = all(s.strict_line for s in slaves)
+        what = slaves[0].what.removeprefix("the ")
+        pty = open_pty(settings)
+        return serve_rtu(
+            runner, pty, devices, link, settings, wire_timing=wire, strict_line=strict, what=what
+        )
     if endpoint.scheme == "serial":
         assert endpoint.device is not None
         transport = open_serial(endpoint.device, settings)

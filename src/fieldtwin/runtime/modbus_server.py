@@ -32,8 +32,10 @@ from fieldtwin.modbus.slave import SlaveSet, Transmission
 from fieldtwin.modbus.timing import RtuTiming, WireTiming
 from fieldtwin.runtime.events import EventBus
 from fieldtwin.runtime.runner import Runner
+from fieldtwin.runtime.uart import REASON_SETTINGS, Uart
 from fieldtwin.runtime.wiretap import Stream, Wiretap
 from fieldtwin.transports.base import LineSettings, Listener, Transport
+from fieldtwin.transports.pty import PtyTransport
 from fieldtwin.transports.tcp import TcpTransport, listener_url
 
 # Real transports deliver bytes with operating-system jitter and no line timing:
@@ -74,6 +76,7 @@ class _Pump:
         self._timer: Handle | None = None
         self._server = server  # its open pumps: this one leaves them on close
         self._stream: Stream | None = None  # the wiretap's decoder, made when first observed
+        self.uart: Uart | None = None  # a pty line: what the device's UART makes of the master
         if server is not None:
             server.pumps[id(self)] = self
         if isinstance(transport, TcpTransport):  # its listener may hang up an idle one
@@ -93,6 +96,12 @@ class _Pump:
         return self._stream
 
     def on_data(self, data: bytes, now: int) -> None:
+        if self.uart is not None and self.uart.admit(data, now) is None:
+            stream = self._observed()
+            if stream is not None and hasattr(stream, "seen_rejected"):
+                stream.seen_rejected(data, now, REASON_SETTINGS, self.uart.describe())
+            self._flush(now)
+            return
         stream = self._observed()
         if stream is not None:
             stream.seen_in(data, now)  # before the core: the TES's state as the request meets it
@@ -291,12 +300,16 @@ def serve_rtu(
     settings: LineSettings,
     wiring: Wiring = Wiring.DOUBLE_PAIR,
     wire_timing: bool = True,
+    strict_line: bool = True,
+    what: str = "TES",
 ) -> ModbusServer:
     """A Modbus RTU line on ``transport`` (pty, serial port or memory).
 
     ``wire_timing`` (real transports): each reply leaves when a real line would
     deliver its last character (``WireTiming``); off, it leaves its answer delay
     after the request's last byte was read (for throughput tests).
+    ``strict_line`` (a pty): a master whose termios speed or parity differ from
+    ``settings`` gets what a UART would make of it, no answer (runtime/uart.py).
     """
     timing = RtuTiming.from_format(settings)
     wire = None
@@ -310,7 +323,9 @@ def serve_rtu(
     server = ModbusServer(runner, "modbus-rtu", where, line.slaves, str(settings), timing=timing)
     if transport.is_real:  # the run stays paced if the serial peer goes (issue 15 item 2)
         server.hold_pace()
-    _Pump(runner, transport, line, server, precise=wire is not None)
+    pump = _Pump(runner, transport, line, server, precise=wire is not None)
+    if isinstance(transport, PtyTransport):  # a pty: the master's termios are visible
+        pump.uart = Uart(transport, settings, line.slaves, what, strict_line, runner.report)
     return server
 
 
