@@ -98,7 +98,7 @@ class _Pump:
     def on_data(self, data: bytes, now: int) -> None:
         if self.uart is not None and self.uart.admit(data, now) is None:
             stream = self._observed()
-            if stream is not None and hasattr(stream, "seen_rejected"):
+            if stream is not None:
                 stream.seen_rejected(data, now, REASON_SETTINGS, self.uart.describe())
             self._flush(now)
             return
