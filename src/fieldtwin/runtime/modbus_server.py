@@ -77,11 +77,16 @@ class _Pump:
         self._server = server  # its open pumps: this one leaves them on close
         self._stream: Stream | None = None  # the wiretap's decoder, made when first observed
         self.uart: Uart | None = None  # a pty line: what the device's UART makes of the master
+        self._close_told = False  # the pcap was told how this TCP connection ended
         if server is not None:
             server.pumps[id(self)] = self
         if isinstance(transport, TcpTransport):  # its listener may hang up an idle one
             transport.in_progress = self.in_progress
         runner.attach(transport, self.on_data, self.on_close)
+        if isinstance(transport, TcpTransport):
+            stream = self._observed()
+            if stream is not None:  # the pcap's three-way handshake, when it happened
+                stream.seen_connection(runner.clock.now, "open", "master")
 
     def in_progress(self) -> bool:
         """A request is in progress: a reply (or a frame's end) is still due."""
@@ -109,7 +114,16 @@ class _Pump:
         self._flush(now)
 
     def on_close(self, now: int) -> None:
+        self._closing("fin", "master")
         self.close()
+
+    def _closing(self, state: str, by: str) -> None:
+        """Tell the pcap how a TCP connection ended (once: ``close`` follows)."""
+        if isinstance(self.transport, TcpTransport) and not self._close_told:
+            self._close_told = True
+            stream = self._observed()
+            if stream is not None:
+                stream.seen_connection(self.runner.clock.now, state, by)
 
     def _want_precise(self, on: bool) -> None:
         if on is not self._precise:
@@ -117,6 +131,7 @@ class _Pump:
             self.runner.want_precise_waits(on)
 
     def close(self) -> None:
+        self._closing("fin", "twin")  # dropped, evicted, or the session ended: the twin's FIN
         self._want_precise(False)
         if self._server is not None:
             self._server.pumps.pop(id(self), None)
@@ -141,6 +156,7 @@ class _Pump:
                 if stream is not None:
                     stream.seen_out(transmission.data, now)
         except TransportError:
+            self._closing("rst", "master")  # the master's end is gone: reset
             self.close()
             return
         if isinstance(self.core, TcpSession) and self.core.closed:

@@ -51,6 +51,7 @@ from fieldtwin.modbus.timing import RtuTiming
 from fieldtwin.runtime.events import EventBus
 
 KIND_MODBUS = "modbus"
+KIND_CONNECTION = "connection"  # a TCP connection opened or closed (the pcap's SYN, FIN, RST)
 KIND_REGISTER = "register"
 IN, OUT = "in", "out"
 MAX_PENDING = 256  # requests remembered per connection to pair their replies
@@ -216,6 +217,20 @@ class Stream:
 
     def seen_out(self, data: bytes, now: int) -> None:
         self.tap.bus.post((self.outbound, bytes(data), now))
+
+    def seen_connection(self, now: int, state: str, by: str) -> None:
+        """A TCP connection opened (``open``) or closed (``fin``, ``rst``) by ``by``
+        (``master`` or ``twin``): a ``connection`` event, not in the JSON trace."""
+        tap = self.tap
+        data = {
+            "endpoint": tap.endpoint,
+            "transport": tap.transport,
+            "listen": tap.where,
+            "conn": self.conn,
+            "state": state,
+            "by": by,
+        }
+        tap.bus.post((tap.bus.deliver, now, KIND_CONNECTION, tap.endpoint, data))
 
     def seen_rejected(self, data: bytes, now: int, reason: str, note: str) -> None:
         """Bytes the device's UART rejected before any framing (runtime/uart.py)."""
