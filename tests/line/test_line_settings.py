@@ -15,11 +15,14 @@ from fieldtwin.testing.process import RunningPlant
 READ_INPUTS = with_crc(bytes([1, 0x03, 0x00, 0x05, 0x00, 0x01]))  # word 005h: input 2 on
 READ_WRONG_CHARACTERS = with_crc(bytes([1, 0x03, 0x00, 0x1B, 0x00, 0x01]))  # 01Bh
 ANSWER = with_crc(bytes([1, 0x03, 0x02, 0x00, 0x04]))
-WAIT_S = 0.5  # far beyond a 38400 Bd exchange (a few ms); every read is bounded by it
+WAIT_S = 0.5  # far beyond a 38400 Bd exchange (a few ms): how long "no answer" is waited for
+ANSWER_S = 3.0  # the bound on an answer (a loaded machine, a plant just started)
 
 
-def exchange(path: str, request: bytes, baud: int = 38400, parity: str = "E") -> bytes:
-    with serial.Serial(path, baud, parity=parity, timeout=WAIT_S) as port:
+def exchange(
+    path: str, request: bytes, baud: int = 38400, parity: str = "E", wait: float = ANSWER_S
+) -> bytes:
+    with serial.Serial(path, baud, parity=parity, timeout=wait) as port:
         port.write(request)
         return bytes(port.read(7))
 
@@ -38,7 +41,7 @@ def test_a_master_at_other_settings_gets_no_answer(
     path = running_plant.modbus(1).url
     assert exchange(path, READ_INPUTS) == ANSWER  # the right settings: an answer
     before = wrong_characters(path)
-    assert exchange(path, READ_INPUTS, baud, parity) == b""  # the TES read garbage
+    assert exchange(path, READ_INPUTS, baud, parity, WAIT_S) == b""  # the TES read garbage
     assert wrong_characters(path) == before + len(READ_INPUTS)
     assert exchange(path, READ_INPUTS) == ANSWER  # set right again: answers again
     said = running_plant.output()

@@ -29,7 +29,7 @@ def tshark_rows(tshark: str, pcap: Path, tcp: int, *fields: str, where: str) -> 
 
 
 def exchange(path: str) -> None:
-    with serial.Serial(path, 38400, parity="E", timeout=0.5) as port:
+    with serial.Serial(path, 38400, parity="E", timeout=3.0) as port:
         port.write(READ_2)
         assert len(port.read(7)) == 7
 

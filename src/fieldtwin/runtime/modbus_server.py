@@ -26,7 +26,7 @@ from fieldtwin.clock import MS, Handle
 from fieldtwin.errors import TransportError
 from fieldtwin.modbus.line import RtuLine, Wiring
 from fieldtwin.modbus.model import Link, SlaveDevice
-from fieldtwin.modbus.rtu import MAX_FRAME
+from fieldtwin.modbus.rtu import COLLISION, MAX_FRAME
 from fieldtwin.modbus.session import TcpSession
 from fieldtwin.modbus.slave import SlaveSet, Transmission
 from fieldtwin.modbus.timing import RtuTiming, WireTiming
@@ -105,6 +105,15 @@ class _Pump:
             stream = self._observed()
             if stream is not None:
                 stream.seen_rejected(data, now, REASON_SETTINGS, self.uart.describe())
+            self._flush(now)
+            return
+        core = self.core
+        if isinstance(core, RtuLine) and core.collides(now):
+            core.collide(data, now)  # half duplex: the master talked over a reply
+            stream = self._observed()
+            if stream is not None:
+                note = "collision: the master sent while a reply was due; the reply is lost"
+                stream.seen_rejected(data, now, COLLISION, note, "crc_errors")
             self._flush(now)
             return
         stream = self._observed()
@@ -318,6 +327,7 @@ def serve_rtu(
     wire_timing: bool = True,
     strict_line: bool = True,
     what: str = "TES",
+    half_duplex: bool | None = None,
 ) -> ModbusServer:
     """A Modbus RTU line on ``transport`` (pty, serial port or memory).
 
@@ -326,6 +336,8 @@ def serve_rtu(
     after the request's last byte was read (for throughput tests).
     ``strict_line`` (a pty): a master whose termios speed or parity differ from
     ``settings`` gets what a UART would make of it, no answer (runtime/uart.py).
+    ``half_duplex`` (default: on for the RS-485 link, a two-wire line; off for RS-232):
+    a master that sends while a reply is due collides with it (modbus/line.py).
     """
     timing = RtuTiming.from_format(settings)
     wire = None
@@ -334,7 +346,9 @@ def serve_rtu(
             wire = WireTiming.from_format(settings, carried=_carries_baud(transport))
         floor = _scaled(runner, REAL_LINE_FLOOR_US)
         timing = timing.relaxed(floor, eager=True, max_lead_us=_max_lead(timing))
-    line = RtuLine(devices, link, timing, wiring, wire)
+    if half_duplex is None:
+        half_duplex = link is Link.RS485
+    line = RtuLine(devices, link, timing, wiring, wire, half_duplex)
     where = f"pty {transport.peer_path}" if transport.peer_path else transport.name
     server = ModbusServer(runner, "modbus-rtu", where, line.slaves, str(settings), timing=timing)
     if transport.is_real:  # the run stays paced if the serial peer goes (issue 15 item 2)

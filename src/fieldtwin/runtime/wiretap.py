@@ -232,17 +232,21 @@ class Stream:
         }
         tap.bus.post((tap.bus.deliver, now, KIND_CONNECTION, tap.endpoint, data))
 
-    def seen_rejected(self, data: bytes, now: int, reason: str, note: str) -> None:
-        """Bytes the device's UART rejected before any framing (runtime/uart.py)."""
-        self.tap.bus.post((self.rejected, bytes(data), now, reason, note))
+    def seen_rejected(
+        self, data: bytes, now: int, reason: str, note: str, fault: str = "wrong_characters"
+    ) -> None:
+        """Bytes the line rejected before any framing (runtime/uart.py, a collision)."""
+        self.tap.bus.post((self.rejected, bytes(data), now, reason, note, fault))
 
     # -- the observers' side: framing, decoding, events --------------------------------
 
-    def rejected(self, data: bytes, now: int, reason: str, note: str) -> None:
+    def rejected(
+        self, data: bytes, now: int, reason: str, note: str, fault: str = "wrong_characters"
+    ) -> None:
         fields: dict[str, object] = {
-            "crc": None,
-            "fault": "wrong_characters",
-            "fault_count": len(data),
+            "crc": "bad" if fault == "crc_errors" else None,
+            "fault": fault,
+            "fault_count": 1 if fault == "crc_errors" else len(data),
             "reason": reason,
             "hex": data[:MAX_REJECTED].hex(),
             "note": note,
