@@ -80,7 +80,9 @@ def _parser() -> argparse.ArgumentParser:
         "--status-every", type=_seconds, default=0.0, help="with --no-live: status every N sim. s"
     )
     run.add_argument("--trace", metavar="FILE", help="write the traffic as JSON lines")
-    run.add_argument("--pcap", metavar="FILE", help="write the Modbus TCP traffic as a pcap")
+    run.add_argument(
+        "--pcap", metavar="FILE", help="write the Modbus TCP and RTU line traffic as a pcap"
+    )
     run.add_argument(
         "--record",
         metavar="FILE",

@@ -134,7 +134,7 @@ class Session:
         if trace:
             self.push(TraceWriter(self.plant.events, trace, report=report).close)
         if pcap:
-            self.push(PcapWriter(self.plant.events, pcap, report=report).close)
+            self.push(PcapWriter(self.plant.events, pcap, report=report, rtu_lines=True).close)
 
     def record(self, path: str) -> Recorder:
         """--record FILE: the plant's inputs and outputs from t = 0 (docs/record.md)."""

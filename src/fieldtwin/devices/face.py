@@ -697,6 +697,7 @@ class ModbusSlave:
     what: str = "the device"  # "the TES": as errors call it
     wire_timing: bool = False
     drop_connections: Callable[[Callable[[], int] | None], None] | None = None
+    strict_line: bool = True  # a pty master at other settings gets no answer (issue 23)
 
 
 @dataclass(frozen=True, slots=True)

@@ -8,6 +8,13 @@ executes, counts the outcome and replies, after its answer delay; a broadcast
 write (slave 0) is executed by all with no reply.  On a single-pair
 (two-wire) bus the others also hear that reply and count it as "not analysed"
 (TES 6.2.3.2 01Dh: "bus single pair: idem or replies sent by other slaves").
+
+Half-duplex collisions (issue 23 item 3; ``half_duplex``, on for a two-wire RS-485
+line): a slave does not listen before it talks, so a master that sends while a
+reply is still due (in its answer delay or on the wire) garbles both.  The reply
+is lost (the master sees none) and the master's bytes reach no slave as a frame:
+one frame with a CRC error for every slave (TES 6.2.3.2 01Ah; docs/manual-notes.md).
+``collides(now)`` says it before the bytes are given; ``collide(data, now)`` takes them.
 """
 
 from __future__ import annotations
@@ -44,6 +51,7 @@ class RtuLine:
         timing: RtuTiming,
         wiring: Wiring = Wiring.DOUBLE_PAIR,
         wire: WireTiming | None = None,
+        half_duplex: bool = False,
     ) -> None:
         # one line, one set: the line-wide counters are counted once per frame
         if isinstance(devices, SlaveSet):
@@ -56,6 +64,18 @@ class RtuLine:
         self.wire = wire  # None: a reply leaves its answer delay after the frame
         self.framer = RtuFramer(timing, request_length)
         self._outbox = Outbox()
+        self.half_duplex = half_duplex
+        self.collisions = 0  # master transmissions that met a reply (half duplex)
+
+    def collides(self, now: int) -> bool:
+        """Bytes from the master now would meet a reply still due: a collision."""
+        return self.half_duplex and self._outbox.next_deadline() is not None
+
+    def collide(self, data: bytes, now: int) -> None:
+        """The master's ``data`` met a reply: both garbled (see the module's docstring)."""
+        self.collisions += 1
+        self._outbox.clear()  # the reply never reaches the master intact
+        self.slaves.count_all(Counter.CRC_ERRORS, now)  # TES 6.2.3.2 01Ah
 
     def receive(self, data: bytes, now: int) -> None:
         """Bytes that arrived at ``now`` (call ``poll(now)`` next for due replies)."""

@@ -63,11 +63,25 @@ class Frame:
 
 @dataclass(frozen=True, slots=True)
 class Fault:
-    """``count`` more of a line counter (CRC_ERRORS, WRONG_CHARACTERS, NO_SILENCE)."""
+    """``count`` more of a line counter (CRC_ERRORS, WRONG_CHARACTERS, NO_SILENCE), with
+    why (one of REASONS) and the bytes rejected, as far as the framer kept them."""
 
     counter: Counter
     count: int
     at: int
+    reason: str = ""
+    data: bytes = b""
+
+
+# Why bytes were rejected (the trace's ``reason``, docs/trace.md)
+BAD_CRC = "bad_crc"  # a frame whose CRC does not check
+NOISE = "noise"  # a fragment too short to be a frame
+OVERRUN = "overrun"  # more than the line can carry: lost in the UART
+SILENCE = "silence"  # a frame broken by a silence longer than t1.5
+OVERLONG = "overlong"  # longer than any RTU frame
+LINE_SETTINGS = "line_settings"  # a master at another speed or parity (runtime/uart.py)
+COLLISION = "collision"  # sent while a reply was on a two-wire line (modbus/line.py)
+REASONS = (BAD_CRC, NOISE, OVERRUN, SILENCE, OVERLONG, LINE_SETTINGS, COLLISION)
 
 
 FramerEvent = Frame | Fault
@@ -114,6 +128,7 @@ class RtuFramer:
         self._buf = bytearray()
         self._last_end = -(10**18)  # end of the last character received
         self._events: list[FramerEvent] = []
+        self._broken = b""  # a frame a silence broke, for its NO_SILENCE fault
 
     @property
     def state(self) -> State:
@@ -155,7 +170,10 @@ class RtuFramer:
             room = max(0, (now + timing.max_lead_us - start) // char)
             if len(data) > room:
                 # TES 6.2.3.2 01Bh: characters lost to a UART overrun are wrong characters
-                self._events.append(Fault(Counter.WRONG_CHARACTERS, len(data) - room, now))
+                lost = data[room:]
+                self._events.append(
+                    Fault(Counter.WRONG_CHARACTERS, len(lost), now, OVERRUN, lost[:MAX_FRAME])
+                )
                 data = data[:room]
                 if not data:
                     return
@@ -182,7 +200,9 @@ class RtuFramer:
         self._buf += data
 
     def _discard(self, data: bytes) -> None:
-        # Modbus RTU: a silence > t1.5 inside a frame makes it incomplete.
+        # Modbus RTU: a silence > t1.5 inside a frame makes it incomplete (the bytes kept
+        # for the trace, up to one frame's worth).
+        self._broken = bytes(self._buf[:MAX_FRAME])
         self._buf.clear()
 
     def _ignore(self, data: bytes) -> None:
@@ -190,14 +210,15 @@ class RtuFramer:
 
     def _not_analysed(self, at: int) -> None:
         # TES 6.2.3.2 01Dh/024h: "not analysed frames by default of silent time".
-        self._events.append(Fault(Counter.NO_SILENCE, 1, at))
+        broken, self._broken = self._broken, b""
+        self._events.append(Fault(Counter.NO_SILENCE, 1, at, SILENCE, broken))
 
     def _overflow(self) -> None:
         self._buf.clear()
 
     def _overlong(self, at: int) -> None:
         # TES 6.2.3.2 01Ah: a frame too long to hold cannot pass its CRC check.
-        self._events.append(Fault(Counter.CRC_ERRORS, 1, at))
+        self._events.append(Fault(Counter.CRC_ERRORS, 1, at, OVERLONG))
 
     def _finish(self, at: int) -> None:
         buf, self._buf = bytes(self._buf), bytearray()
@@ -207,10 +228,10 @@ class RtuFramer:
             return
         if len(rest) < MIN_FRAME:
             # A fragment too short to be a frame: wrong characters (TES 6.2.3.2 01Bh).
-            self._events.append(Fault(Counter.WRONG_CHARACTERS, len(rest), at))
+            self._events.append(Fault(Counter.WRONG_CHARACTERS, len(rest), at, NOISE, rest))
         else:
             # TES 6.2.3.2 01Ah: "received frames with CRC16 errors".
-            self._events.append(Fault(Counter.CRC_ERRORS, 1, at))
+            self._events.append(Fault(Counter.CRC_ERRORS, 1, at, BAD_CRC, rest))
 
     # -- cutting complete frames off the head --------------------------------------
 

@@ -62,7 +62,13 @@ def serve_group(
         listener = backends.listener(endpoint.host, endpoint.port)
         return serve_rtu_over_tcp(runner, listener, devices, settings, link, wire_timing=wire)
     if endpoint.scheme == "pty":
-        return serve_rtu(runner, backends.pty(settings), devices, link, settings, wire_timing=wire)
+        # a UART at the TES's settings reads the master's (issue 23); false on any TES: off
+        strict = all(s.strict_line for s in slaves)
+        what = slaves[0].what.removeprefix("the ")
+        pty = backends.pty(settings)
+        return serve_rtu(
+            runner, pty, devices, link, settings, wire_timing=wire, strict_line=strict, what=what
+        )
     if endpoint.scheme == "serial":
         assert endpoint.device is not None
         transport = backends.serial(endpoint.device, settings)

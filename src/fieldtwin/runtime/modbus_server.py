@@ -26,14 +26,16 @@ from fieldtwin.clock import MS, Handle
 from fieldtwin.errors import TransportError
 from fieldtwin.modbus.line import RtuLine, Wiring
 from fieldtwin.modbus.model import Link, SlaveDevice
-from fieldtwin.modbus.rtu import MAX_FRAME
+from fieldtwin.modbus.rtu import COLLISION, MAX_FRAME
 from fieldtwin.modbus.session import TcpSession
 from fieldtwin.modbus.slave import SlaveSet, Transmission
 from fieldtwin.modbus.timing import RtuTiming, WireTiming
 from fieldtwin.runtime.events import EventBus
 from fieldtwin.runtime.runner import Runner
+from fieldtwin.runtime.uart import REASON_SETTINGS, Uart
 from fieldtwin.runtime.wiretap import Stream, Wiretap
 from fieldtwin.transports.base import LineSettings, Listener, Transport
+from fieldtwin.transports.pty import PtyTransport
 from fieldtwin.transports.tcp import TcpTransport, listener_url
 
 # Real transports deliver bytes with operating-system jitter and no line timing:
@@ -74,11 +76,17 @@ class _Pump:
         self._timer: Handle | None = None
         self._server = server  # its open pumps: this one leaves them on close
         self._stream: Stream | None = None  # the wiretap's decoder, made when first observed
+        self.uart: Uart | None = None  # a pty line: what the device's UART makes of the master
+        self._close_told = False  # the pcap was told how this TCP connection ended
         if server is not None:
             server.pumps[id(self)] = self
         if isinstance(transport, TcpTransport):  # its listener may hang up an idle one
             transport.in_progress = self.in_progress
         runner.attach(transport, self.on_data, self.on_close)
+        if isinstance(transport, TcpTransport):
+            stream = self._observed()
+            if stream is not None:  # the pcap's three-way handshake, when it happened
+                stream.seen_connection(runner.clock.now, "open", "master")
 
     def in_progress(self) -> bool:
         """A request is in progress: a reply (or a frame's end) is still due."""
@@ -93,6 +101,21 @@ class _Pump:
         return self._stream
 
     def on_data(self, data: bytes, now: int) -> None:
+        if self.uart is not None and self.uart.admit(data, now) is None:
+            stream = self._observed()
+            if stream is not None:
+                stream.seen_rejected(data, now, REASON_SETTINGS, self.uart.describe())
+            self._flush(now)
+            return
+        core = self.core
+        if isinstance(core, RtuLine) and core.collides(now):
+            core.collide(data, now)  # half duplex: the master talked over a reply
+            stream = self._observed()
+            if stream is not None:
+                note = "collision: the master sent while a reply was due; the reply is lost"
+                stream.seen_rejected(data, now, COLLISION, note, "crc_errors")
+            self._flush(now)
+            return
         stream = self._observed()
         if stream is not None:
             stream.seen_in(data, now)  # before the core: the TES's state as the request meets it
@@ -100,7 +123,16 @@ class _Pump:
         self._flush(now)
 
     def on_close(self, now: int) -> None:
+        self._closing("fin", "master")
         self.close()
+
+    def _closing(self, state: str, by: str) -> None:
+        """Tell the pcap how a TCP connection ended (once: ``close`` follows)."""
+        if isinstance(self.transport, TcpTransport) and not self._close_told:
+            self._close_told = True
+            stream = self._observed()
+            if stream is not None:
+                stream.seen_connection(self.runner.clock.now, state, by)
 
     def _want_precise(self, on: bool) -> None:
         if on is not self._precise:
@@ -108,6 +140,7 @@ class _Pump:
             self.runner.want_precise_waits(on)
 
     def close(self) -> None:
+        self._closing("fin", "twin")  # dropped, evicted, or the session ended: the twin's FIN
         self._want_precise(False)
         if self._server is not None:
             self._server.pumps.pop(id(self), None)
@@ -132,6 +165,7 @@ class _Pump:
                 if stream is not None:
                     stream.seen_out(transmission.data, now)
         except TransportError:
+            self._closing("rst", "master")  # the master's end is gone: reset
             self.close()
             return
         if isinstance(self.core, TcpSession) and self.core.closed:
@@ -291,12 +325,19 @@ def serve_rtu(
     settings: LineSettings,
     wiring: Wiring = Wiring.DOUBLE_PAIR,
     wire_timing: bool = True,
+    strict_line: bool = True,
+    what: str = "TES",
+    half_duplex: bool | None = None,
 ) -> ModbusServer:
     """A Modbus RTU line on ``transport`` (pty, serial port or memory).
 
     ``wire_timing`` (real transports): each reply leaves when a real line would
     deliver its last character (``WireTiming``); off, it leaves its answer delay
     after the request's last byte was read (for throughput tests).
+    ``strict_line`` (a pty): a master whose termios speed or parity differ from
+    ``settings`` gets what a UART would make of it, no answer (runtime/uart.py).
+    ``half_duplex`` (default: on for the RS-485 link, a two-wire line; off for RS-232):
+    a master that sends while a reply is due collides with it (modbus/line.py).
     """
     timing = RtuTiming.from_format(settings)
     wire = None
@@ -305,12 +346,16 @@ def serve_rtu(
             wire = WireTiming.from_format(settings, carried=_carries_baud(transport))
         floor = _scaled(runner, REAL_LINE_FLOOR_US)
         timing = timing.relaxed(floor, eager=True, max_lead_us=_max_lead(timing))
-    line = RtuLine(devices, link, timing, wiring, wire)
+    if half_duplex is None:
+        half_duplex = link is Link.RS485
+    line = RtuLine(devices, link, timing, wiring, wire, half_duplex)
     where = f"pty {transport.peer_path}" if transport.peer_path else transport.name
     server = ModbusServer(runner, "modbus-rtu", where, line.slaves, str(settings), timing=timing)
     if transport.is_real:  # the run stays paced if the serial peer goes (issue 15 item 2)
         server.hold_pace()
-    _Pump(runner, transport, line, server, precise=wire is not None)
+    pump = _Pump(runner, transport, line, server, precise=wire is not None)
+    if isinstance(transport, PtyTransport):  # a pty: the master's termios are visible
+        pump.uart = Uart(transport, settings, line.slaves, what, strict_line, runner.report)
     return server
 
 

@@ -6,8 +6,16 @@ with dpkt (docs/decisions.md): per connection, a three-way handshake the first
 time it is seen, then sequence and acknowledgement numbers that follow the
 bytes each side sent, so that a dissector reassembles the stream.  The frames
 are the bytes that crossed the socket (``hex`` of the event); packet times are
-the simulated time plus the wall-clock instant the writer started.  RTU on a
-pty or a serial line has no TCP to show: it goes to the JSON trace only.
+the simulated time plus the wall-clock instant the writer started.
+
+Issue 23: a connection's close is written as the close it was (``connection``
+events of the server): FIN from the side that closed, answered by a FIN from
+the other, or an RST when the master's end vanished.  RTU on a pty or a serial
+line has no TCP: each line is written as one synthetic TCP stream carrying its
+RTU bytes, from 127.1.1.N to 127.1.0.N port RTU_PORT (N: the line's number in
+order of first traffic), which ``tshark -d tcp.port==65020,mbrtu`` decodes as
+Modbus RTU.  Bytes an RTU line rejected (``hex`` of a line fault) are written
+where they arrived, so the capture has every byte.
 Errors: as the trace writer (reported once, the capture stops, the plant runs).
 """
 
@@ -28,6 +36,10 @@ from fieldtwin.errors import ConfigError
 from fieldtwin.runtime.events import Event, EventBus, Subscription
 
 TCP_TRANSPORTS = ("tcp", "rtu+tcp")
+RTU_LINE = "rtu"  # a pty or a serial line: a synthetic stream (issue 23)
+RTU_PORT = 65020  # its server port: `tshark -d tcp.port==65020,mbrtu` (docs/trace.md)
+RTU_CLIENT_PORT = 40000
+KIND_CONNECTION = "connection"  # fieldtwin.runtime.wiretap's
 QUEUE = 10_000
 MAX_CONNECTIONS = 4096  # connections whose sequence numbers are remembered (oldest forgotten)
 SERVER_MAC = bytes.fromhex("020000000001")  # locally administered addresses
@@ -133,8 +145,10 @@ class PcapWriter:
         *,
         report: Report | None = None,
         start_wall: float | None = None,
+        rtu_lines: bool = False,
     ) -> None:
         self.path = Path(path)
+        self.rtu_lines = rtu_lines  # write pty and serial RTU lines too (`fieldtwin run` does)
         try:
             raw: BinaryIO = open(self.path, "wb")  # noqa: SIM115
         except OSError as exc:
@@ -146,8 +160,9 @@ class PcapWriter:
         self._conns: dict[tuple[str, str], _Connection] = {}
         self.packets = 0
         self.failed: str | None = None
+        self._lines: dict[str, int] = {}  # RTU lines, numbered in order of first traffic
         self._sub: Subscription | None = bus.subscribe(
-            ("modbus",), maxlen=QUEUE, notify=self._drain
+            ("modbus", KIND_CONNECTION), maxlen=QUEUE, notify=self._drain
         )
 
     def _drain(self) -> None:
@@ -162,11 +177,21 @@ class PcapWriter:
 
     def _event(self, event: Event) -> None:
         data = event.data
-        if data.get("transport") not in TCP_TRANSPORTS or "hex" not in data:
+        transport = data.get("transport")
+        if event.kind == KIND_CONNECTION:
+            if transport in TCP_TRANSPORTS:
+                self._lifecycle(event)
+            return
+        if "hex" not in data or not data["hex"]:
             return
         payload = bytes.fromhex(str(data["hex"]))
         ts = self._start + event.t_us / 1e6
-        conn = self._connection(str(data.get("listen", "")), str(data.get("conn", "")), ts)
+        if transport == RTU_LINE and self.rtu_lines:
+            conn = self._rtu_line(str(data.get("endpoint", "")), str(data.get("listen", "")), ts)
+        elif transport in TCP_TRANSPORTS:
+            conn = self._connection(str(data.get("listen", "")), str(data.get("conn", "")), ts)
+        else:
+            return
         push = dpkt.tcp.TH_PUSH | dpkt.tcp.TH_ACK
         if data.get("dir") == "in":
             self._packet(ts, conn, True, conn.client_seq, conn.server_seq, push, payload)
@@ -175,19 +200,62 @@ class PcapWriter:
             self._packet(ts, conn, False, conn.server_seq, conn.client_seq, push, payload)
             conn.server_seq += len(payload)
 
+    def _rtu_line(self, endpoint: str, where: str, ts: float) -> _Connection:
+        """The synthetic stream of one RTU line (see the module's docstring)."""
+        key = (RTU_LINE, f"{endpoint} {where}")
+        conn = self._conns.get(key)
+        if conn is not None:
+            return conn
+        number = self._lines.setdefault(key[1], len(self._lines) + 1)
+        high, low = divmod(number, 256)
+        conn = _Connection(
+            (bytes((127, 1, high * 2, low)), RTU_PORT),
+            (bytes((127, 1, high * 2 + 1, low)), RTU_CLIENT_PORT),
+        )
+        return self._opened(key, conn, ts)
+
+    def _lifecycle(self, event: Event) -> None:
+        """A TCP connection opened (SYN) or closed (FIN both ways, or RST)."""
+        data = event.data
+        ts = self._start + event.t_us / 1e6
+        listen, peer = str(data.get("listen", "")), str(data.get("conn", ""))
+        state = data.get("state")
+        if state == "open":
+            self._connection(listen, peer, ts)
+            return
+        conn = self._conns.pop((listen, peer), None)
+        if conn is None:
+            return  # never seen open: nothing to close
+        ack, fin = dpkt.tcp.TH_ACK, dpkt.tcp.TH_FIN | dpkt.tcp.TH_ACK
+        if state == "rst":
+            self._packet(ts, conn, True, conn.client_seq, conn.server_seq, dpkt.tcp.TH_RST, b"")
+            return
+        # FIN from the side that closed, the other's FIN, the last ACK
+        first = data.get("by") == "master"
+        seq = {True: conn.client_seq, False: conn.server_seq}
+        self._packet(ts, conn, first, seq[first], seq[not first], fin, b"")
+        seq[first] += 1
+        self._packet(ts, conn, not first, seq[not first], seq[first], fin, b"")
+        seq[not first] += 1
+        self._packet(ts, conn, first, seq[first], seq[not first], ack, b"")
+
     def _connection(self, listen: str, peer: str, ts: float) -> _Connection:
         key = (listen, peer)
         conn = self._conns.get(key)
         if conn is not None:
             return conn
-        if len(self._conns) >= MAX_CONNECTIONS:
-            self._conns.pop(next(iter(self._conns)))
         server_host, server_port = split_hostport(listen)
         client_host, client_port = split_hostport(peer)
         conn = _Connection(
             (_ipv4(server_host, FALLBACK_SERVER), server_port),
             (_ipv4(client_host, FALLBACK_CLIENT), client_port),
         )
+        return self._opened(key, conn, ts)
+
+    def _opened(self, key: tuple[str, str], conn: _Connection, ts: float) -> _Connection:
+        """Remember ``conn`` and write its three-way handshake."""
+        if len(self._conns) >= MAX_CONNECTIONS:
+            self._conns.pop(next(iter(self._conns)))
         self._conns[key] = conn
         syn, ack = dpkt.tcp.TH_SYN, dpkt.tcp.TH_ACK
         self._packet(ts, conn, True, ISN_CLIENT, 0, syn, b"")

@@ -140,15 +140,41 @@ def describe(item: Mapping[str, object]) -> str:
     if item.get("kind") != "modbus":
         return f"{head}  {item.get('kind')}"
     if "fault" in item:
-        return f"{head}  {direction:<3}  line fault {item['fault']} x{item.get('fault_count', 1)}"
+        return _fault(head, direction, item)
     if "error" in item:
         return f"{head}  {direction:<3}  {item['error']}"
     slave = item.get("slave")
     parts = [head, f"{direction:<3}", f"slave {slave}", str(item.get("function_name", "?"))]
     if "address" in item:
         parts.append(f"addr {item['address']} count {item.get('count')}")
+    if item.get("function") not in _PLAIN:  # never to be read as another (FC 22 is not 16)
+        parts.append(_code(item))
     parts.append(_result(item))
-    return "  ".join(parts)
+    return "  ".join(p for p in parts if p)
+
+
+# functions the TES executes (TES 7.1.1): their names alone; any other shows its code
+_PLAIN = frozenset((1, 2, 3, 4, 5, 6, 7, 8, 15, 16))
+
+
+def _code(item: Mapping[str, object]) -> str:
+    """``[FC 22 = 0x16]``: the function code in decimal and hex, after its Modbus name."""
+    code = item.get("function")
+    return f"[FC {code} = 0x{code:02x}]" if isinstance(code, int) else ""
+
+
+def _fault(head: str, direction: str, item: Mapping[str, object]) -> str:
+    """``line fault crc_errors x1 (bad_crc): 01 03 00 05 00 01 95 ca``; a note after it."""
+    text = f"{head}  {direction:<3}  line fault {item['fault']} x{item.get('fault_count', 1)}"
+    reason, data = item.get("reason"), item.get("hex")
+    if reason:
+        text += f" ({reason})"
+    if isinstance(data, str) and data:
+        text += ": " + " ".join(data[i : i + 2] for i in range(0, min(len(data), 64), 2))
+        text += " ..." if len(data) > 64 else ""
+    if item.get("note"):
+        text += f"  [{item['note']}]"
+    return text
 
 
 def _result(item: Mapping[str, object]) -> str:

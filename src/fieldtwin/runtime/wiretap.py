@@ -51,9 +51,11 @@ from fieldtwin.modbus.timing import RtuTiming
 from fieldtwin.runtime.events import EventBus
 
 KIND_MODBUS = "modbus"
+KIND_CONNECTION = "connection"  # a TCP connection opened or closed (the pcap's SYN, FIN, RST)
 KIND_REGISTER = "register"
 IN, OUT = "in", "out"
 MAX_PENDING = 256  # requests remembered per connection to pair their replies
+MAX_REJECTED = 256  # bytes of one rejected chunk kept in its event (one RTU frame's worth)
 
 FUNCTION_NAMES = {
     0x01: "read_coils",
@@ -66,6 +68,17 @@ FUNCTION_NAMES = {
     0x08: "diagnostics",
     0x0F: "write_multiple_coils",
     0x10: "write_multiple_registers",
+    # the other public function codes (Modbus Application Protocol V1.1b3, 6.x): the TES
+    # answers them with exception 01, and the trace names them as Modbus does (issue 23)
+    0x0B: "get_comm_event_counter",
+    0x0C: "get_comm_event_log",
+    0x11: "report_server_id",
+    0x14: "read_file_record",
+    0x15: "write_file_record",
+    0x16: "mask_write_register",
+    0x17: "read_write_multiple_registers",
+    0x18: "read_fifo_queue",
+    0x2B: "encapsulated_interface_transport",
 }
 
 # What a TES does with a request, as the trace says it (docs/trace.md).
@@ -78,7 +91,9 @@ BROADCAST_IGNORED = "broadcast_ignored"  # AMB-TES-29: a broadcast read
 
 
 def function_name(function: int) -> str:
-    base = FUNCTION_NAMES.get(function & 0x7F, f"function_{function & 0x7F:02x}")
+    code = function & 0x7F
+    # a code with no Modbus name: in decimal and hex, never to be read as another
+    base = FUNCTION_NAMES.get(code, f"function_{code}_0x{code:02x}")
     return f"{base}_exception" if function & EXCEPTION_FLAG else base
 
 
@@ -203,7 +218,40 @@ class Stream:
     def seen_out(self, data: bytes, now: int) -> None:
         self.tap.bus.post((self.outbound, bytes(data), now))
 
+    def seen_connection(self, now: int, state: str, by: str) -> None:
+        """A TCP connection opened (``open``) or closed (``fin``, ``rst``) by ``by``
+        (``master`` or ``twin``): a ``connection`` event, not in the JSON trace."""
+        tap = self.tap
+        data = {
+            "endpoint": tap.endpoint,
+            "transport": tap.transport,
+            "listen": tap.where,
+            "conn": self.conn,
+            "state": state,
+            "by": by,
+        }
+        tap.bus.post((tap.bus.deliver, now, KIND_CONNECTION, tap.endpoint, data))
+
+    def seen_rejected(
+        self, data: bytes, now: int, reason: str, note: str, fault: str = "wrong_characters"
+    ) -> None:
+        """Bytes the line rejected before any framing (runtime/uart.py, a collision)."""
+        self.tap.bus.post((self.rejected, bytes(data), now, reason, note, fault))
+
     # -- the observers' side: framing, decoding, events --------------------------------
+
+    def rejected(
+        self, data: bytes, now: int, reason: str, note: str, fault: str = "wrong_characters"
+    ) -> None:
+        fields: dict[str, object] = {
+            "crc": "bad" if fault == "crc_errors" else None,
+            "fault": fault,
+            "fault_count": 1 if fault == "crc_errors" else len(data),
+            "reason": reason,
+            "hex": data[:MAX_REJECTED].hex(),
+            "note": note,
+        }
+        self._publish(now, IN, None, fields)
 
     def inbound(self, data: bytes, now: int, states: tuple[State, ...] | None = None) -> None:
         self._states = states
@@ -265,6 +313,9 @@ class Stream:
                     "fault": event.counter.value,
                     "fault_count": event.count,
                 }
+                if event.reason:  # issue 23: why, and the bytes themselves
+                    fields["reason"] = event.reason
+                    fields["hex"] = event.data.hex()
                 self._publish(event.at, IN, None, fields)
                 continue
             slave, pdu = event.slave, event.pdu

@@ -85,6 +85,9 @@ class Tes:
         # on a real RTU endpoint, replies leave when a real line would deliver them
         # (TES 7.2.7, docs/modbus.md "Wire timing"); the plant key ``wire_timing``
         self.wire_timing = True
+        # issue 23: a pty master at another speed or parity gets what a UART makes of it
+        # (runtime/uart.py); the plant key ``strict_line = false`` turns that off
+        self.strict_line = True
         self.clock = clock if clock is not None else SimClock()
         self.name = name or f"{self.model.name} #{slave or 1}"
         self.prm_jumper = prm_jumper

@@ -12,13 +12,79 @@ it were a serial port: ``serial.Serial(transport.peer_path, timeout=1)``.
 termios and tty are imported when a pty is opened, not with this module: the rest of
 the package (a TCP-only plant, the console) runs where they do not exist (README,
 "POSIX").
+
+Even parity and the "parked" pty (issue 23 item 2).  Linux's pty driver keeps no
+parity and no character size: every termios change on a pty clears PARENB and
+forces CS8 (drivers/tty/pty.c, ``pty_set_termios``).  glibc's ``tcsetattr(TCSANOW)``
+then reads the settings back and, when the call changed nothing at all while it
+asked for a parity (or a size) the result lacks, fails with EINVAL: pyserial's
+``termios.error: (22, 'Invalid argument')``.  So a master opening a pty with
+``parity='E'`` failed exactly when the pty already held what it asked for apart
+from the parity (the same speed: the twin's own line speed, written here, or what
+a previous master left), and worked when its open changed the speed.  The twin
+therefore keeps its pty *parked*: IXANY set in the input flags (harmless: the pty
+has no IXON flow control, and every serial library clears it), so the master's
+configuration always changes something and glibc never complains.  ``peer_line``
+reads what the master set and parks the pty again.
 """
 
 from __future__ import annotations
 
 import os
+from dataclasses import dataclass
 
+from fieldtwin.charformat import CharFormat, Parity
 from fieldtwin.transports.base import READ_CHUNK, FdTransport, LineSettings, line_settings
+
+
+@dataclass(frozen=True, slots=True)
+class PeerLine:
+    """What a pty shows of its master's line settings: speed, stop bits, odd parity.
+
+    Even parity and none look the same on a Linux pty (the driver clears PARENB),
+    and so do 7 and 8 data bits (it forces CS8).
+    """
+
+    baud: int | None  # None: a rate termios has no constant for (BOTHER)
+    stop_bits: int
+    odd: bool
+
+    def seen_as(self, own: CharFormat) -> CharFormat | None:
+        """The master's format, with what a pty hides taken from ``own``; None: unknown speed."""
+        if self.baud is None:
+            return None
+        if self.odd:
+            parity = Parity.ODD
+        else:
+            parity = Parity.NONE if own.parity is Parity.NONE else Parity.EVEN
+        return CharFormat(self.baud, own.data_bits, parity, self.stop_bits)
+
+    def differs(self, own: CharFormat) -> bool:
+        """A UART at ``own`` would not read this master's characters: speed or parity.
+
+        Stop bits are not compared: a UART checks one stop bit, so a second is idle line.
+        """
+        return self.baud != own.baud or self.odd != (own.parity is Parity.ODD)
+
+
+def _speeds() -> dict[int, int]:
+    import termios
+
+    out = {}
+    for name in dir(termios):
+        if name.startswith("B") and name[1:].isdigit():
+            out[getattr(termios, name)] = int(name[1:])
+    return out
+
+
+def _park(fd: int) -> None:
+    """Set IXANY on ``fd`` (see the module's docstring): a master's next change shows."""
+    import termios
+
+    attrs = termios.tcgetattr(fd)
+    if not attrs[0] & termios.IXANY:
+        attrs[0] |= termios.IXANY
+        termios.tcsetattr(fd, termios.TCSANOW, attrs)
 
 
 def _apply_speed(fd: int, baud: int) -> None:
@@ -45,6 +111,7 @@ class PtyTransport(FdTransport):
             tty.setraw(slave)
             self.settings = settings or line_settings()
             _apply_speed(slave, self.settings.baud)
+            _park(slave)
             os.set_blocking(master, False)
             path = os.ttyname(slave)
         except BaseException:
@@ -58,6 +125,28 @@ class PtyTransport(FdTransport):
 
     def _write(self, data: bytes) -> int:
         return os.write(self._master, data)
+
+    def peer_line(self) -> PeerLine | None:
+        """The settings the master set since the last call (then parked again); None: none."""
+        slave = getattr(self, "_slave", None)  # a replay's pty has none: nothing to see
+        if self.closed or slave is None:
+            return None
+        import termios
+
+        try:
+            attrs = termios.tcgetattr(slave)
+            if attrs[0] & termios.IXANY:
+                return None  # still parked: the master changed nothing
+            cflag = attrs[2]
+            line = PeerLine(
+                baud=_speeds().get(attrs[5]),
+                stop_bits=2 if cflag & termios.CSTOPB else 1,
+                odd=bool(cflag & termios.PARENB or cflag & termios.PARODD),
+            )
+            _park(slave)
+        except termios.error:
+            return None  # the pty is going away: its close is reported elsewhere
+        return line
 
     def receive(self) -> bytes:
         """What the peer has written since the last call; b"" if nothing."""

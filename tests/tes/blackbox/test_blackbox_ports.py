@@ -43,6 +43,7 @@ endpoint = "pty"
 link = "rs232"
 name = "esa"
 store = "eeprom.db"
+strict_line = false  # the masters below open the 8O1 pty 8N1 (pymodbus cannot set parity)
 
 [[tes]]
 model = "TES 32ST"

@@ -160,6 +160,7 @@ def modbus_slave(
         "the TES",
         tes.wire_timing,
         drop,
+        strict_line=tes.strict_line,
     )
 
 

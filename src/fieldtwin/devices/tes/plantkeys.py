@@ -9,6 +9,7 @@
     prm_jumper = false                     # true: factory settings, slave 1 (§3.1.2)
     link = "rs485"                         # which TES port the endpoint is (rs485, rs232)
     wire_timing = true                     # RTU on pty/serial/rtu+tcp: replies at line speed
+    strict_line = true                     # pty: a master at another speed gets no answer
     inputs = { 0 = true, a2 = 4.5, a3 = { kind = "square", low = 1.0, high = 9.0, period_s = 2 } }
     faults = { short = [3], open = [7], not_ready_ms = 2, powered = true }
 
@@ -39,6 +40,7 @@ KEYS = (
     "prm_jumper",
     "link",
     "wire_timing",
+    "strict_line",
     "inputs",
     "faults",
 )
@@ -88,6 +90,7 @@ def build_one(
     except ConfigError as exc:
         raise ConfigError(f"{at}: {exc}") from None
     tes.wire_timing = wire
+    tes.strict_line = strict_line_of(table, at)
     if signals:
         _inputs(tes, table.get("inputs", {}), f"{at}.inputs", base_dir)
     faults = table.get("faults", {})
@@ -201,6 +204,14 @@ def wire_timing_of(table: Mapping[str, Any], at: str) -> bool:
     if not isinstance(wire, bool):
         raise ConfigError(f"{at}.wire_timing: {wire!r} not allowed (allowed: true, false)")
     return wire
+
+
+def strict_line_of(table: Mapping[str, Any], at: str) -> bool:
+    """``strict_line``: true (the default: a pty master's settings must match) or false."""
+    strict = table.get("strict_line", True)
+    if not isinstance(strict, bool):
+        raise ConfigError(f"{at}.strict_line: {strict!r} not allowed (allowed: true, false)")
+    return strict
 
 
 def check_lines(built: list[Tes], tables: Sequence[Mapping[str, Any]], where: str) -> None:
