@@ -230,21 +230,18 @@ class EventBus:
                     except Exception as exc:  # a decoder's bug: told, the plant runs on
                         self._failed(exc)
                 handled += count
-                self._wake_subscribers(full_only=True)  # a long round: none overflows
+                self._wake_subscribers()  # a file writer drains its queue chunk by chunk
                 if feed:
                     time.sleep(YIELD_S)  # the simulation's thread may want the interpreter
             self._wake_subscribers()
         return handled
 
-    def _wake_subscribers(self, full_only: bool = False) -> None:
-        """Wake the subscribers that got events (a wake-up is a system call: once per
-        round; within a round only those whose queue is half full)."""
+    def _wake_subscribers(self) -> None:
         lost, self._lost = self._lost, 0
         for sub in self._subs:
             if lost:
                 sub._lost(lost)
-            if not full_only or 2 * len(sub._queue) >= (sub._queue.maxlen or 0):
-                sub._wake()
+            sub._wake()
 
     def _failed(self, exc: Exception) -> None:
         self.errors += 1
