@@ -12,9 +12,9 @@ plant at the tick's resolution (docs/control.md, "Events").
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
-from fieldtwin.devices.face import Device
+from fieldtwin.devices.face import Device, peeker
 from fieldtwin.errors import FieldtwinError
 from fieldtwin.runtime.events import EventBus
 
@@ -30,7 +30,8 @@ class Observer:
         self._objects: dict[tuple[str, str], int] = {}
         self._leds: dict[tuple[str, str], str] = {}
         self._watching = False  # a first look after a subscriber came publishes nothing
-        self._names: dict[int, list[str]] = {}  # id(device) -> its object names, looked up once
+        # id(device) -> (name, its peek bound once) of each object, looked up once
+        self._peeks: dict[int, list[tuple[str, Callable[[], int]]]] = {}
 
     def sample(self, now: int) -> None:
         if not self.bus.active:
@@ -52,14 +53,15 @@ class Observer:
                 self.bus.publish(now, "led", address, {"led": name, "state": state, "was": was})
 
     def _look_objects(self, device: Device, address: str, now: int, first: bool) -> None:
-        objects = device.objects()
-        names = self._names.get(id(device))
-        if names is None:  # a TES lists "H'003' name": the address is enough
+        peeks = self._peeks.get(id(device))
+        if peeks is None:  # a TES lists "H'003' name": the address is enough
+            objects = device.objects()
             names = [entry.address for entry in objects.names()[:MAX_OBJECTS]]
-            self._names[id(device)] = names
-        for name in names:
+            peeks = [(name, peeker(objects, name)) for name in names]  # names parsed once
+            self._peeks[id(device)] = peeks
+        for name, peek in peeks:
             try:
-                value = objects.peek(name)
+                value = peek()
             except FieldtwinError:
                 continue  # a module out of its slot, a word its model lacks
             key = (address, name)
