@@ -23,6 +23,7 @@ from .helpers import EXAMPLES
 from .test_properties import _checks
 from .test_roundtrip import programs
 
+
 def _rebuild(node: Any, change: Callable[[Any], Any]) -> Any:
     """``node`` rebuilt bottom-up with ``change`` applied to every tree node."""
     if isinstance(node, tuple):
