@@ -12,11 +12,16 @@ default) and with the full refresh of every slot at every task (the baseline).
 Prints speed factors over real time (simulated s per CPU s and per wall s), the
 edges time-stamped and the messages logged, and the gain.
 
-    python benchmarks/dem_rack.py [simulated seconds, default 60]
+    python benchmarks/dem_rack.py [simulated seconds, default 60] [--counts]
+
+``--counts`` also prints the instructions per simulated second of the event-driven
+rack (benchmarks/counts.py: perf or callgrind, a fixed workload of 5 and 25 simulated
+seconds after the set-up), which the machine's load does not move.
 """
 
 from __future__ import annotations
 
+import argparse
 import sys
 import time
 
@@ -79,8 +84,26 @@ def run(event_driven: bool, sim_s: int) -> tuple[float, float, int, int]:
     return sim_s / cpu, sim_s / wall, edges, messages
 
 
+def workload(sim_s: int) -> None:
+    """The counted work: the event-driven rack, ``sim_s`` simulated seconds."""
+    plc, mods = build(True)
+    for _ in range(sim_s):
+        plc.advance(1.0)
+        for module in mods:
+            module.read_messages(len(module.stack))
+    print(f"units {sim_s}")
+
+
 def main() -> int:
-    sim_s = int(sys.argv[1]) if len(sys.argv) > 1 else 60
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("sim_s", nargs="?", type=int, default=60, help="simulated seconds")
+    parser.add_argument("--counts", action="store_true", help="also instructions per sim s")
+    parser.add_argument("--workload", type=int, help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.workload is not None:
+        workload(args.workload)
+        return 0
+    sim_s = args.sim_s
     print(f"TSX 87, {MODULES} DEM 2412 on one sync output, all logging; {sim_s} simulated s")
     print(f"{'bus refresh':<14} {'cpu':>9} {'wall':>9} {'edges':>8} {'messages':>9}")
     results = {}
@@ -91,6 +114,10 @@ def main() -> int:
         results[event_driven] = (cpu, edges, messages)
     assert results[True][1:] == results[False][1:], "the two refreshes logged differently"
     print(f"gain (cpu): {results[True][0] / results[False][0]:.2f}; same edges and messages")
+    if args.counts:
+        from counts import per_unit
+
+        print("event-driven:", per_unit(__file__, 5, 25, "simulated second"), flush=True)
     return 0
 
 

@@ -14,6 +14,13 @@ runs that kit's compare.py instead, by path (never copied here): pymodbus 3.16,
 libmodbus when its anchor is built, and fieldtwin serving a TES 32EST, FC03 and
 FC16 x 10 words at 1 and 8 connections, alternated, medians and ratios against
 pymodbus.  It says so when the kit or its mbload binary is absent.
+
+With ``--counts`` it prints the instructions our server process executes per
+request (benchmarks/counts.py: perf or callgrind), FC03 of 10 words from 8
+connections, for the table device and the TES 32EST: a fixed workload (``--workload
+N``: the server, fed by 8 client processes of N/8 requests each, which are not
+counted), at two sizes, so that start-up cancels out.  The machine's load does not
+move these figures.
 """
 
 from __future__ import annotations
@@ -68,6 +75,50 @@ class Table:
 
     def answer_delay(self, link: Link) -> int:
         return 0
+
+
+def _client_count(port: int, count: int) -> None:
+    """A counted workload's client: ``count`` requests, one at a time, then exit."""
+    request = encode_request(ReadWords(3, 0, WORDS))
+    with socket.create_connection(("127.0.0.1", port), timeout=60) as sock:
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        for tid in range(1, count + 1):
+            sock.sendall(encode_mbap(tid, UNIT, request))
+            got = b""
+            while len(got) < REPLY_SIZE:
+                chunk = sock.recv(4096)
+                if not chunk:
+                    raise SystemExit("server closed the connection")
+                got += chunk
+
+
+def workload(kind: str, requests: int, connections: int = 8) -> None:
+    """The counted work: our server answering ``requests`` FC03 from ``connections``
+    client processes (started with exec, so a counter does not follow them)."""
+    clock = SimClock()
+    devices: list[SlaveDevice]
+    if kind == "tes":
+        from fieldtwin.tes import Tes
+
+        devices = [Tes("32EST", UNIT, clock=clock)]
+    else:
+        devices = [Table(UNIT)]
+    runner = Runner(clock, speed=1.0)
+    listener = listen("127.0.0.1", 0)
+    serve_tcp(runner, listener, devices)
+    each = requests // connections
+    command = [sys.executable, __file__, "--client", str(listener.address[1]), str(each)]
+    clients = [subprocess.Popen(command) for _ in range(connections)]
+    deadline = time.monotonic() + 1800
+
+    def done(now: int) -> None:
+        if all(c.poll() is not None for c in clients) or time.monotonic() > deadline:
+            runner.stop()
+
+    runner.run_forever(done, tick_us=20_000)
+    if any(c.wait(10) != 0 for c in clients):
+        raise SystemExit("a client failed")
+    print(f"units {each * connections}")
 
 
 def _free_port() -> int:
@@ -178,7 +229,24 @@ def main() -> None:
     parser.add_argument("--duration", type=float, default=2.0, help="seconds per case")
     parser.add_argument("--kit", help="the shared benchmark kit's directory (compare.py, mbload)")
     parser.add_argument("--reps", type=int, default=3, help="with --kit: repetitions")
+    parser.add_argument("--counts", action="store_true", help="instructions per request")
+    parser.add_argument("--workload", type=int, help=argparse.SUPPRESS)
+    parser.add_argument("--device", default="table", help=argparse.SUPPRESS)
+    parser.add_argument("--client", nargs=2, type=int, help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.client is not None:
+        _client_count(*args.client)
+        return
+    if args.workload is not None:
+        workload(args.device, args.workload)
+        return
+    if args.counts:
+        from counts import per_unit
+
+        for device in ("table", "tes"):
+            result = per_unit(__file__, 400, 2000, "request", "--device", device)
+            print(f"fieldtwin server ({device}), 8 connections, FC03: {result}", flush=True)
+        return
     if args.kit is not None:
         raise SystemExit(_kit(Path(args.kit), args.duration, args.reps))
     mp.set_start_method("spawn", force=True)

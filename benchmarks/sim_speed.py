@@ -14,6 +14,12 @@ process (the figure to compare on a shared machine) and per wall second.
     python benchmarks/sim_speed.py            # the default plant 1 h, devices 10 min
     python benchmarks/sim_speed.py --day      # and the default plant for 24 h
     python benchmarks/sim_speed.py --cli      # and `fieldtwin run` itself, for 1 h
+    python benchmarks/sim_speed.py --counts   # and instructions per simulated second
+
+``--counts``: the instructions the default plant executes per simulated second
+(benchmarks/counts.py: perf or callgrind on a fixed workload, 60 and 300 simulated
+seconds after the warm-up, in fresh processes), which the machine's load does not
+move.
 """
 
 from __future__ import annotations
@@ -124,6 +130,18 @@ def idle_rack(count: int) -> Callable[[], Plant]:
     return make
 
 
+def workload(sim_s: int) -> None:
+    """The counted work: the default plant, ``sim_s`` simulated seconds after its warm-up."""
+    plant = build(default_data())
+    try:
+        advance = advancer(plant)
+        advance(WARM_UP_S)
+        advance(float(sim_s))
+    finally:
+        plant.close()
+    print(f"units {sim_s}")
+
+
 def cli(sim_s: float) -> None:
     command = [sys.executable, "-m", "fieldtwin", "run", "--speed", "max"]
     command += ["--duration", str(sim_s), "--no-live", "--no-control"]
@@ -144,7 +162,12 @@ def main() -> int:
     parser.add_argument("--cli", action="store_true", help="also `fieldtwin run` for 1 h")
     parser.add_argument("--hour", type=float, default=3600.0, help="the default plant's stretch")
     parser.add_argument("--device", type=float, default=600.0, help="each device's stretch")
+    parser.add_argument("--counts", action="store_true", help="instructions per simulated s")
+    parser.add_argument("--workload", type=int, help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.workload is not None:
+        workload(args.workload)
+        return 0
     print("speed factor over real time (simulated s per CPU s / per wall s); one process")
     head = f"{'case':<34} {'sim':>7} {'cpu':>10} {'wall':>10}"
     print(head + f" {'full cpu':>10} {'full wall':>10} {'gain':>7}")
@@ -173,6 +196,11 @@ def main() -> int:
         row(f"TSX 87, {count} idle modules", args.device, idle_rack(count))
     if args.cli:
         cli(args.hour)
+    if args.counts:
+        from counts import per_unit
+
+        result = per_unit(__file__, 60, 300, "simulated second")
+        print(f"default plant (AEM program): {result}", flush=True)
     return 0
 
 
