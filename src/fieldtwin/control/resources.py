@@ -17,6 +17,7 @@ from fieldtwin.clock import MS, S
 from fieldtwin.clock import seconds as to_us
 from fieldtwin.console import Console
 from fieldtwin.console_syntax import module_address
+from fieldtwin.control.snapshot import Snapshot
 from fieldtwin.devices.face import (
     Device,
     DeviceStatus,
@@ -121,6 +122,8 @@ class Control:
         self._console_started: Future[Json] | None = None  # a mode a console line started
         self._exchanges: OrderedDict[int, _Started] = OrderedDict()
         self._next_exchange = 1
+        # the reads that change nothing, as the simulation's thread last made them
+        self.snapshot = Snapshot()
 
     # --- the plant and its devices -----------------------------------------------
 
@@ -384,6 +387,7 @@ class Control:
             if then is not None:
                 then()
             back = {"power": "back"} if then is not None else {}
+            self.snapshot.changed()  # before a waiting request has its answer
             ended.set_result(self._clock_event(what, {**back, "cut": cut}))
 
         self.runner.start_mode(name, until, end)

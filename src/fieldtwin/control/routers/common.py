@@ -1,0 +1,77 @@
+"""What every router shares: the hop onto the simulation's thread, the snapshot
+reads, and the wait for a runner mode's end."""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import Callable, Hashable
+from concurrent.futures import Future
+from typing import Any, TypeVar
+
+from fieldtwin.control.resources import Control, Json
+from fieldtwin.control.sim import DEFAULT_WAIT_S, Sim
+
+T = TypeVar("T")
+MODE_POLL_S = 0.25  # a request waiting for a mode's end looks this often for a stopped run
+REPLY: dict[str, Any] = {"response_model_exclude_unset": True}  # optional keys left out
+
+
+class Hop:
+    """The routes' way to the plant: ``run`` a command on the simulation's thread
+    (the snapshot is stale after it: read-your-writes), or ``read`` what changes
+    nothing from the snapshot the simulation published."""
+
+    def __init__(self, control: Control, sim: Sim) -> None:
+        self.control = control
+        self.sim = sim
+        self.snapshot = control.snapshot
+
+    async def run(self, fn: Callable[[], T], wait_s: float = DEFAULT_WAIT_S) -> T:
+        snapshot = self.snapshot
+
+        def command() -> T:
+            try:
+                return fn()
+            finally:
+                snapshot.changed()  # before the answer: a later read sees the effect
+
+        return await self.sim.call(command, wait_s)
+
+    async def read(self, key: Hashable, fn: Callable[[], T]) -> T:
+        found = self.snapshot.get(key)
+        if found is not None:
+            value: T = found
+            return value
+        return await self.sim.call(lambda: self.snapshot.take(key, fn))
+
+
+async def mode(hop: Hop, start: Callable[[], Json], wait: bool, wait_s: float) -> Json:
+    """Start a runner mode (step, run-until, power-break); its state at once, or with
+    ``wait`` at its end (at most ``wait_s``; the run stopping ends the wait too)."""
+    c = hop.control
+    state, ended = await hop.run(lambda: (start(), c.mode_ended))
+    if not wait or ended is None:
+        return state
+    result = await mode_end(c, ended, wait_s)
+    if result is not None:
+        return result
+    return await hop.run(c.clock_state)  # still running: the mode as it stands
+
+
+async def mode_end(c: Control, ended: Future[Json], wait_s: float) -> Json | None:
+    """The end of a mode (its clock state), awaited at most ``wait_s``; None if it
+    has not ended by then or the run stops."""
+    done = asyncio.wrap_future(ended)
+    loop = asyncio.get_running_loop()
+    deadline = loop.time() + wait_s
+    try:
+        while not done.done() and c.runner.running and loop.time() < deadline:
+            await asyncio.wait({done}, timeout=min(MODE_POLL_S, deadline - loop.time()))
+        ended_now = done.done() and not done.cancelled()
+    finally:
+        if not done.done():
+            done.cancel()  # the mode's own future runs on (it cannot be cancelled)
+    return done.result() if ended_now else None
+
+
+__all__ = ["MODE_POLL_S", "REPLY", "Hop", "mode", "mode_end"]
