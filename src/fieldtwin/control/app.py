@@ -175,7 +175,11 @@ def create_app(
 
     hop = Hop(control, sim)
     for group in GROUPS:
-        app.include_router(group.router(hop))
+        # each group's routes become the app's own (their paths are whole): the gates,
+        # the 405's Allow and the document find a route by path and method among
+        # app.router.routes (fieldtwin.control.document), which include_router would
+        # hide behind one entry per router
+        app.router.routes.extend(group.router(hop).routes)
     add_stream(app, control, sim)
     add_dashboard(app)
     add_docs(app)

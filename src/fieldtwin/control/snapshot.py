@@ -24,8 +24,11 @@ MAX_KEYS = 1024  # reads remembered (a device's status, an object's peek...); th
 class Snapshot:
     """Values made on the simulation's thread, read from the web server's."""
 
-    def __init__(self, max_age_s: float = MAX_AGE_S) -> None:
+    def __init__(
+        self, max_age_s: float = MAX_AGE_S, now: Callable[[], float] = time.monotonic
+    ) -> None:
         self.max_age_s = max_age_s
+        self._now = now  # wall seconds (a test's own clock)
         self.version = 0  # written on the simulation's thread only
         self._values: dict[Hashable, tuple[int, float, Any]] = {}
 
@@ -38,7 +41,7 @@ class Snapshot:
         value = fn()
         if len(self._values) >= MAX_KEYS:
             self._values = {}
-        self._values[key] = (self.version, time.monotonic(), value)
+        self._values[key] = (self.version, self._now(), value)
         return value
 
     def get(self, key: Hashable) -> Any | None:
@@ -47,7 +50,7 @@ class Snapshot:
         if found is None:
             return None
         version, made, value = found
-        if version != self.version or time.monotonic() - made > self.max_age_s:
+        if version != self.version or self._now() - made > self.max_age_s:
             return None
         return value
 
