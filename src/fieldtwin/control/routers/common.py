@@ -25,6 +25,9 @@ class Hop:
         self.control = control
         self.sim = sim
         self.snapshot = control.snapshot
+        # the hop in flight for each read, with the snapshot's version when it left
+        # (on the web server's loop only): the reads that come meanwhile share it
+        self._pending: dict[Hashable, tuple[int, asyncio.Future[Any]]] = {}
 
     async def run(self, fn: Callable[[], T], wait_s: float = DEFAULT_WAIT_S) -> T:
         snapshot = self.snapshot
@@ -38,11 +41,28 @@ class Hop:
         return await self.sim.call(command, wait_s)
 
     async def read(self, key: Hashable, fn: Callable[[], T]) -> T:
-        found = self.snapshot.get(key)
+        snapshot = self.snapshot
+        found = snapshot.get(key)
         if found is not None:
             value: T = found
             return value
-        return await self.sim.call(lambda: self.snapshot.take(key, fn))
+        version = snapshot.version
+        pending = self._pending.get(key)
+        if pending is not None and pending[0] == version:
+            # a hop that left since the last command: its value is made after this
+            # request came, so it is this request's answer too
+            shared: T = await asyncio.shield(pending[1])
+            return shared
+        hop = asyncio.ensure_future(self.sim.call(lambda: snapshot.take(key, fn)))
+        self._pending[key] = (version, hop)
+
+        def done(_: object) -> None:
+            if self._pending.get(key, (0, None))[1] is hop:
+                del self._pending[key]
+
+        hop.add_done_callback(done)
+        mine: T = await asyncio.shield(hop)
+        return mine
 
 
 async def mode(hop: Hop, start: Callable[[], Json], wait: bool, wait_s: float) -> Json:
