@@ -1,8 +1,17 @@
 """The control API's figures: requests/s, event-stream events/s, Modbus TCP with and without
-a subscriber (issue 11).
+a subscriber (issue 11), and the API against references (issue 26).
 
-* API: a closed loop of ``GET /clock`` (one command through the runner's inbox each)
-  and of ``PUT .../inputs`` against a real ``fieldtwin run`` (default plant, x1);
+* API against references: ``GET /clock`` (answered from the snapshot the simulation
+  published) and ``PUT .../inputs/3`` (a command through the runner's inbox) on a real
+  ``fieldtwin run`` (default plant, x1), each beside the same request on a reference
+  started here in its own process: a bare FastAPI + uvicorn app answering the same
+  bodies (target: GET >= 0.8x bare), and pymodbus's simulator REST API setting one
+  register (``POST /restapi/registers``; target: PUT >= 1x; it needs aiohttp, the
+  ``pymodbus[simulator]`` extra: skipped without).  The load is wrk (Debian's ``wrk``)
+  when on PATH, else as many client processes as connections (httpx, closed loop);
+  each figure is the best of ROUNDS rounds alternated between the servers (the
+  machine's load drifts during a run);
+* a closed loop of one ``httpx`` client (one connection) on the same two requests;
 * event stream: events published on an EventBus as fast as one thread can, carried
   by the real WebSocket endpoint (uvicorn in a thread) to a websockets client:
   received per second, and how many a bounded queue dropped;
@@ -14,16 +23,242 @@ Run:  .venv/bin/python benchmarks/control.py [seconds per measure]
 
 from __future__ import annotations
 
+import importlib.util
+import json
+import multiprocessing
+import os
+import re
+import shutil
+import socket
+import subprocess
 import sys
 import tempfile
 import threading
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
+
+from pydantic import BaseModel
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from tests.control.plantproc import default_plant_copy, fieldtwin_run  # noqa: E402
+
+CONNECTIONS = 8  # the load's connections (wrk: on one thread; else one process each)
+ROUNDS = 2
+GET_TARGET, PUT_TARGET = 0.8, 1.0
+INPUT_BODY = {"value": True}
+START_S = 30.0
+
+
+# --- the references, each served in a process of its own ------------------------------
+
+
+class BareBody(BaseModel):
+    value: bool | int | float | str | None = None
+
+
+def serve_bare(port: int) -> None:
+    """A bare FastAPI app on uvicorn: the same paths and bodies, no plant behind."""
+    import uvicorn
+    from fastapi import FastAPI
+
+    app = FastAPI()
+    state = {"t_s": 1.0, "t_us": 1_000_000, "paused": False, "speed": 1.0, "mode": None}
+
+    @app.get("/clock")
+    async def clock() -> dict[str, object]:
+        return {**state, "until_s": None, "speed_reached": 1.0, "speed_kept": True}
+
+    @app.put("/devices/{ident}/inputs/{name}")
+    async def put_input(ident: str, name: str, body: BareBody) -> dict[str, object]:
+        return {"device": ident, "input": name, "value": body.value}
+
+    uvicorn.run(app, host="127.0.0.1", port=port, log_level="warning", access_log=False)
+
+
+def serve_pymodbus(http_port: int, modbus_port: int, tmp: str) -> None:
+    """pymodbus's simulator: its Modbus TCP server and its REST API (aiohttp)."""
+    import asyncio
+
+    import pymodbus.server.simulator as simulator
+    from pymodbus.server import ModbusSimulatorServer
+
+    setup = json.loads((Path(simulator.__file__).parent / "setup.json").read_text())
+    setup["server_list"]["server"].update(host="127.0.0.1", port=modbus_port)
+    path = Path(tmp) / "setup.json"
+    path.write_text(json.dumps(setup))
+
+    async def run() -> None:
+        server = ModbusSimulatorServer(
+            http_host="127.0.0.1",
+            http_port=http_port,
+            json_file=str(path),
+            log_file=str(Path(tmp) / "server.log"),
+        )
+        await server.run_forever()
+
+    asyncio.run(run())
+
+
+def free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        port: int = sock.getsockname()[1]
+        return port
+
+
+@contextmanager
+def served(args: list[str], port: int) -> Iterator[str]:
+    """``benchmarks/control.py ARGS`` in a process of its own, until its port answers."""
+    proc = subprocess.Popen(
+        [sys.executable, __file__, *args], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
+    )
+    try:
+        deadline = time.monotonic() + START_S
+        while True:
+            try:
+                socket.create_connection(("127.0.0.1", port), timeout=1).close()
+                break
+            except OSError:
+                if proc.poll() is not None or time.monotonic() > deadline:
+                    err = proc.stderr.read().decode() if proc.stderr else ""
+                    raise RuntimeError(f"{args[0]} did not start: {err[-2000:]}") from None
+                time.sleep(0.05)
+        yield f"http://127.0.0.1:{port}"
+    finally:
+        proc.terminate()
+        try:
+            proc.wait(10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(10)
+
+
+# --- the load ---------------------------------------------------------------------------
+
+
+def wrk_rate(url: str, method: str, body: object, seconds: float) -> float:
+    """Requests/s by wrk (every answer must be a 2xx: asserted)."""
+    with tempfile.NamedTemporaryFile("w", suffix=".lua", delete=False) as script:
+        script.write(f'wrk.method = "{method}"\n')
+        if body is not None:
+            script.write(f"wrk.body = {json.dumps(json.dumps(body))}\n")
+            script.write('wrk.headers["Content-Type"] = "application/json"\n')
+    try:
+        done = subprocess.run(
+            [
+                "wrk",
+                "-t1",
+                f"-c{CONNECTIONS}",
+                f"-d{max(1, round(seconds))}s",
+                "-s",
+                script.name,
+                url,
+            ],
+            capture_output=True,
+            text=True,
+            timeout=seconds + 30,
+            check=True,
+        )
+    finally:
+        os.unlink(script.name)
+    assert "Non-2xx" not in done.stdout and "Socket errors" not in done.stdout, done.stdout
+    found = re.search(r"Requests/sec:\s+([\d.]+)", done.stdout)
+    assert found, done.stdout
+    return float(found.group(1))
+
+
+def _client_loop(url: str, method: str, body: object, seconds: float, out: object) -> None:
+    import httpx
+
+    count, end = 0, time.perf_counter() + seconds
+    with httpx.Client(timeout=10) as http:
+        while time.perf_counter() < end:
+            reply = http.request(method, url, json=body)
+            assert reply.status_code < 300, reply.text
+            count += 1
+    out.put(count)  # type: ignore[attr-defined]
+
+
+def processes_rate(url: str, method: str, body: object, seconds: float) -> float:
+    """Requests/s by CONNECTIONS client processes, each a closed loop on its connection."""
+    context = multiprocessing.get_context("spawn")
+    counts = context.Queue()
+    workers = [
+        context.Process(target=_client_loop, args=(url, method, body, seconds, counts))
+        for _ in range(CONNECTIONS)
+    ]
+    for worker in workers:
+        worker.start()
+    total = sum(counts.get(timeout=seconds + 60) for _ in workers)
+    for worker in workers:
+        worker.join(10)
+    return total / seconds
+
+
+def load_rate(url: str, method: str, body: object, seconds: float) -> float:
+    if shutil.which("wrk"):
+        return wrk_rate(url, method, body, seconds)
+    return processes_rate(url, method, body, seconds)
+
+
+def register_body() -> dict[str, object]:
+    """pymodbus's REST API: set register 1 (a value it keeps), as its web page does."""
+    return {"submit": "Set", "register": 1, "value": 7, "range_start": 1, "range_stop": 1}
+
+
+def against_references(url: str, seconds: float) -> None:
+    """Our GET /clock and PUT input against the bare app and pymodbus's REST API."""
+    tool = "wrk" if shutil.which("wrk") else f"{CONNECTIONS} client processes"
+    print(f"load: {tool}, {CONNECTIONS} connections, best of {ROUNDS} rounds of {seconds:g} s")
+    bare_port = free_port()
+    have_sim = importlib.util.find_spec("aiohttp") is not None
+    figures: dict[str, float] = {}
+
+    def best(name: str, rate: float) -> None:
+        figures[name] = max(figures.get(name, 0.0), rate)
+
+    put_path = "/devices/tes1/inputs/3"
+    sim_port = free_port()
+    with (
+        served(["--serve-bare", str(bare_port)], bare_port) as bare,
+        tempfile.TemporaryDirectory() as tmp,
+    ):
+        sim_args = ["--serve-pymodbus", str(sim_port), str(free_port()), tmp]
+        with served(sim_args, sim_port) if have_sim else _nothing() as sim:
+            for _ in range(ROUNDS):
+                best("get", load_rate(url + "/clock", "GET", None, seconds))
+                best("get bare", load_rate(bare + "/clock", "GET", None, seconds))
+                best("put", load_rate(url + put_path, "PUT", INPUT_BODY, seconds))
+                best("put bare", load_rate(bare + put_path, "PUT", INPUT_BODY, seconds))
+                if sim:
+                    rest = sim + "/restapi/registers"
+                    best("put sim", load_rate(rest, "POST", register_body(), seconds))
+    get, put = figures["get"], figures["put"]
+    get_ratio = get / figures["get bare"]
+    print(f"GET /clock, fieldtwin (snapshot):    {get:8.0f} requests/s")
+    print(f"GET /clock, bare FastAPI + uvicorn:  {figures['get bare']:8.0f} requests/s")
+    print(f"  ratio {get_ratio:.2f} ({_verdict(get_ratio, GET_TARGET)})")
+    print(f"PUT input, fieldtwin (inbox):        {put:8.0f} requests/s")
+    print(f"PUT input, bare FastAPI + uvicorn:   {figures['put bare']:8.0f} requests/s")
+    if "put sim" in figures:
+        put_ratio = put / figures["put sim"]
+        print(f"POST /restapi/registers, pymodbus:   {figures['put sim']:8.0f} requests/s")
+        print(f"  ratio {put_ratio:.2f} ({_verdict(put_ratio, PUT_TARGET)})")
+    else:
+        print("pymodbus simulator REST API: skipped (needs aiohttp: 'pymodbus[simulator]')")
+
+
+def _verdict(ratio: float, target: float) -> str:
+    return f"target >= {target}: {'met' if ratio >= target else 'NOT met'}"
+
+
+@contextmanager
+def _nothing() -> Iterator[str]:
+    yield ""
 
 
 def api_rate(url: str, seconds: float) -> tuple[float, float]:
@@ -134,11 +369,18 @@ def with_subscriber(url: str, port: int, seconds: float) -> tuple[float, int]:
 
 
 def main() -> None:
+    if len(sys.argv) > 1 and sys.argv[1] == "--serve-bare":
+        serve_bare(int(sys.argv[2]))
+        return
+    if len(sys.argv) > 1 and sys.argv[1] == "--serve-pymodbus":
+        serve_pymodbus(int(sys.argv[2]), int(sys.argv[3]), sys.argv[4])
+        return
     seconds = float(sys.argv[1]) if len(sys.argv) > 1 else 3.0
     with tempfile.TemporaryDirectory() as tmp, fieldtwin_run(default_plant_copy(Path(tmp))) as run:
+        against_references(run.url, seconds)
         clock, inputs = api_rate(run.url, seconds)
-        print(f"API GET /clock:                      {clock:8.0f} requests/s")
-        print(f"API PUT /devices/tes1/inputs/3:      {inputs:8.0f} requests/s")
+        print(f"API GET /clock, one connection:      {clock:8.0f} requests/s")
+        print(f"API PUT /devices/tes1/inputs/3, one: {inputs:8.0f} requests/s")
         # alternated (bare, watched, bare): the machine's load drifts during a run
         before = modbus_rate(run.modbus_port, seconds)
         watched, seen = with_subscriber(run.url, run.modbus_port, seconds)

@@ -1,7 +1,9 @@
 """The control API's routes (FastAPI): REST/JSON over the Device face (docs/control.md).
 
-Each handler validates its request (the schemas), hands one function to the
-simulation's thread (``Sim.call``) and answers with its result.  Errors are
+The routes are fieldtwin.control.routers' (one APIRouter per resource group, the
+answers typed by fieldtwin.control.replies): each validates its request (the
+schemas), hands one function to the simulation's thread (``Sim.call``) or reads
+the snapshot it published, and answers with the result.  Errors are
 JSON: ``{"error": "...", "field": "...", "allowed": "..."}``; 400 for a user's
 mistake the plant names, 404 for an unknown device, input, fault or exchange,
 409 for a request the plant's state refuses (a time already past, a busy Text
@@ -11,45 +13,27 @@ Block), 413 for a body over 64 KiB, 422 for a body that does not fit its schema,
 
 from __future__ import annotations
 
-import asyncio
 import json
 from collections.abc import Callable, Mapping, Sequence
-from concurrent.futures import Future
-from typing import Any, TypeVar
+from typing import Any
 
-from fastapi import FastAPI, Query, Request
+from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.middleware.cors import CORSMiddleware
 
 from fieldtwin import __version__
-from fieldtwin.console import with_text
 from fieldtwin.control.dashboard import add_dashboard, add_docs
 from fieldtwin.control.document import allowed_methods, bodyless, declare, routed
 from fieldtwin.control.guards import BodyLimit, BrowserGate, TokenGate, origin_of
 from fieldtwin.control.resources import Conflict, Control, NotFound
-from fieldtwin.control.schemas import (
-    ConsoleBody,
-    ExchangeBody,
-    FaultBody,
-    InputBody,
-    ModeBody,
-    ModuleBody,
-    ObjectBody,
-    PowerBreakBody,
-    RunUntilBody,
-    SpeedBody,
-    StepBody,
-)
-from fieldtwin.control.sim import DEFAULT_WAIT_S, CommandTimeout, Sim
+from fieldtwin.control.routers import GROUPS
+from fieldtwin.control.routers.common import Hop
+from fieldtwin.control.sim import CommandTimeout, Sim
 from fieldtwin.control.stream import add_stream
-from fieldtwin.errors import ConfigError, FieldtwinError
+from fieldtwin.errors import ConfigError
 from fieldtwin.runtime.inbox import InboxClosed, InboxFull
-
-T = TypeVar("T")
-MODE_POLL_S = 0.25  # a request waiting for a mode's end looks this often for a stopped run
-
 
 _TYPE_TAGS = {"bool", "int", "float", "str", "list", "dict", "none"}
 
@@ -189,15 +173,15 @@ def create_app(
     app.add_exception_handler(InboxClosed, _busy)
     app.add_exception_handler(CommandTimeout, _late)
 
-    async def run(fn: Callable[[], T], wait_s: float = DEFAULT_WAIT_S) -> T:
-        return await sim.call(fn, wait_s)
-
-    _plant_routes(app, control, run, sim)
-    _device_routes(app, control, run, sim.command)
-    _plc_routes(app, control, run, sim.command)
-    _clock_routes(app, control, run, sim.command)
+    hop = Hop(control, sim)
+    for group in GROUPS:
+        # each group's routes become the app's own (their paths are whole): the gates,
+        # the 405's Allow and the document find a route by path and method among
+        # app.router.routes (fieldtwin.control.document), which include_router would
+        # hide behind one entry per router
+        app.router.routes.extend(group.router(hop).routes)
     add_stream(app, control, sim)
-    add_dashboard(app, control, run)
+    add_dashboard(app)
     add_docs(app)
     declare(app, token=token is not None)
     inner: Any = TokenGate(app, token)
@@ -213,176 +197,6 @@ def create_app(
         inner, host=host, allow_origins=origins, bodyless=bodyless(app), routed=routed(app)
     )
     return BodyLimit(doors)
-
-
-Run = Callable[..., Any]
-Do = Callable[..., Any]  # Sim.command: a control command, a value through the plant's door
-
-
-def _plant_routes(app: FastAPI, c: Control, run: Run, sim: Sim) -> None:
-    @app.get("/plant", summary="the plant, its clock and its devices")
-    async def plant() -> Any:
-        return await run(c.plant_json)
-
-    @app.post("/console", summary="run one console command line on the running plant")
-    async def console(body: ConsoleBody) -> Any:
-        # an advance or power break starts a runner mode: answered at its end (at most
-        # wait_s), the plant serving every other request meanwhile
-        # the line is a value through the plant's door, as every command
-        try:
-            answer, ended = await sim.line(
-                with_text(body.line, body.text),
-                then=lambda lines: ({"lines": lines, "error": None}, c.take_console_mode()),
-                wait_s=body.wait_s + 1,
-            )
-        except (InboxFull, InboxClosed):
-            raise  # the simulation's door is full or shut: 503, as for every command
-        except FieldtwinError as exc:  # the console's own refusal: its answer, not a 400
-            await run(c.take_console_mode)  # a refused line leaves no mode to wait for
-            return {"lines": [], "error": str(exc)}
-        if ended is None:
-            return answer
-        result = await _mode_end(c, ended, body.wait_s)
-        return answer if result is None else await run(lambda: c.console_mode_answer(result))
-
-
-def _device_routes(app: FastAPI, c: Control, run: Run, do: Do) -> None:
-    @app.get(
-        "/devices/{ident}",
-        summary="a device's status: state, mode, LEDs, ports, active faults, outputs",
-    )
-    async def status(ident: str) -> Any:
-        return await run(lambda: c.status(ident))
-
-    @app.get("/devices/{ident}/leds", summary="a device's front-panel LEDs")
-    async def leds(ident: str) -> Any:
-        return await run(lambda: c.leds(ident))
-
-    @app.get("/devices/{ident}/inputs", summary="a device's inputs")
-    async def inputs(ident: str) -> Any:
-        return await run(lambda: c.inputs(ident))
-
-    @app.put("/devices/{ident}/inputs/{name}", summary="set an input, or drive it by a signal")
-    async def set_input(ident: str, name: str, body: InputBody) -> Any:
-        return await do("set_input", ident, name, body.value, body.signal)
-
-    @app.get(
-        "/devices/{ident}/faults",
-        summary="the faults that apply to a device, each active or not, with its parameters",
-    )
-    async def faults(ident: str) -> Any:
-        return await run(lambda: c.faults(ident))
-
-    @app.put("/devices/{ident}/faults/{name}", summary="set (or clear) a fault")
-    async def set_fault(ident: str, name: str, body: FaultBody) -> Any:
-        return await do("set_fault", ident, name, body.active, body.params)
-
-    @app.delete("/devices/{ident}/faults/{name}", summary="clear a fault")
-    async def clear_fault(ident: str, name: str) -> Any:
-        return await do("set_fault", ident, name, False, {})
-
-    @app.get(
-        "/devices/{ident}/outputs",
-        summary="every output a device drives, in its units, the raw word beside",
-        responses={404: {"description": "no such device (the message lists the devices)"}},
-    )
-    async def outputs(ident: str) -> Any:
-        return await run(lambda: c.outputs(ident))
-
-    @app.get("/devices/{ident}/objects", summary="the objects a master reads and writes")
-    async def objects(ident: str) -> Any:
-        return await run(lambda: c.objects(ident))
-
-    @app.get("/devices/{ident}/objects/{name}", summary="read an object (peek: no side effect)")
-    async def read_object(ident: str, name: str, peek: bool = Query(False)) -> Any:
-        return await do("read_object", ident, name, peek)
-
-    @app.put("/devices/{ident}/objects/{name}", summary="write an object")
-    async def write_object(ident: str, name: str, body: ObjectBody) -> Any:
-        return await do("write_object", ident, name, body.value)
-
-    @app.post("/devices/{ident}/power-cycle", summary="a TES: 24 V off and on again")
-    async def power_cycle(ident: str) -> Any:
-        return await do("power_cycle", ident)
-
-
-def _plc_routes(app: FastAPI, c: Control, run: Run, do: Do) -> None:
-    @app.post("/exchanges", status_code=202, summary="start a Text Block exchange")
-    async def start(body: ExchangeBody) -> Any:
-        return await do(
-            "start_exchange", body.m, body.c, body.send, body.text, body.length, body.recv, body.txt
-        )
-
-    @app.get("/exchanges/{ident}", summary="an exchange: state, and its result once done")
-    async def poll(ident: int) -> Any:
-        return await do("exchange", ident)
-
-    @app.post("/plc/power-break", summary="cut the PLC supply for some seconds (a mode)")
-    async def power_break(body: PowerBreakBody) -> Any:
-        return await _mode(run, do, c, ("power_break", body.seconds), body)
-
-    @app.post("/plc/remove", summary="pull a module out of its slot under power")
-    async def remove(body: ModuleBody) -> Any:
-        return await do("remove", body.module)
-
-    @app.post("/plc/insert", summary="put a module back (it runs its self-test)")
-    async def insert(body: ModuleBody) -> Any:
-        return await do("insert", body.module)
-
-
-async def _mode(run: Run, do: Do, c: Control, start: tuple[str, float], body: ModeBody) -> Any:
-    """Start a runner mode (step, run-until, power-break); its state at once, or with
-    ``wait`` at its end (at most ``wait_s``; the run stopping ends the wait too)."""
-    state, ended = await do(*start, then=lambda state: (state, c.mode_ended))
-    if not body.wait or ended is None:
-        return state
-    result = await _mode_end(c, ended, body.wait_s)
-    if result is not None:
-        return result
-    return await run(c.clock_state)  # still running: the mode as it stands
-
-
-async def _mode_end(c: Control, ended: Future[Any], wait_s: float) -> Any | None:
-    """The end of a mode (its clock state), awaited at most ``wait_s``; None if it
-    has not ended by then or the run stops."""
-    done = asyncio.wrap_future(ended)
-    loop = asyncio.get_running_loop()
-    deadline = loop.time() + wait_s
-    try:
-        while not done.done() and c.runner.running and loop.time() < deadline:
-            await asyncio.wait({done}, timeout=min(MODE_POLL_S, deadline - loop.time()))
-        ended_now = done.done() and not done.cancelled()
-    finally:
-        if not done.done():
-            done.cancel()  # the mode's own future runs on (it cannot be cancelled)
-    return done.result() if ended_now else None
-
-
-def _clock_routes(app: FastAPI, c: Control, run: Run, do: Do) -> None:
-    @app.get("/clock", summary="simulated time, paused or not, speed")
-    async def clock() -> Any:
-        return await run(c.clock_json)
-
-    @app.post("/clock/pause", summary="hold simulated time")
-    async def pause() -> Any:
-        return await do("pause")
-
-    @app.post("/clock/resume", summary="let simulated time run again")
-    async def resume() -> Any:
-        return await do("resume")
-
-    @app.post("/clock/step", summary="run simulated time by ms, paused or not (a mode)")
-    async def step(body: StepBody) -> Any:
-        return await _mode(run, do, c, ("step", body.ms), body)
-
-    @app.post("/clock/run-until", summary="run simulated time until t_s (a mode)")
-    async def run_until(body: RunUntilBody) -> Any:
-        return await _mode(run, do, c, ("run_until", body.t_s), body)
-
-    @app.put("/clock/speed", summary="change the speed factor (or max)")
-    async def speed(body: SpeedBody) -> Any:
-        value = None if body.speed == "max" else float(body.speed)
-        return await do("set_speed", value)
 
 
 __all__ = ["create_app"]

@@ -8,7 +8,10 @@
         print(plant.read("5", "IW5,0"), plant.console("status 5").lines)
 
 A refused request raises :class:`ControlError` (its ``status`` and the API's
-``error`` message); a plant that cannot be reached raises it too (status 0).
+``error`` message); a plant that cannot be reached raises it too (status 0), and
+an answer that does not fit its model (fieldtwin.control.replies, the models the
+server answers with) raises it with status 502.  Each verb returns the answer's
+JSON as before (a dict, a list), checked against its model.
 """
 
 from __future__ import annotations
@@ -23,7 +26,9 @@ from typing import TYPE_CHECKING, Any
 from urllib.parse import quote, urlencode, urlsplit
 
 import httpx
+from pydantic import BaseModel, TypeAdapter, ValidationError
 
+from fieldtwin.control import replies
 from fieldtwin.errors import FieldtwinError
 
 if TYPE_CHECKING:
@@ -132,67 +137,99 @@ class Client:
             raise ControlError(reply.status_code, str(message or data), data)
         return data
 
+    def _answer(self, model: type[BaseModel], method: str, path: str, *a: Any, **kw: Any) -> Any:
+        """One request, its answer parsed by ``model`` (502 if it does not fit)."""
+        data = self.request(method, path, *a, **kw)
+        try:
+            model.model_validate(data)
+        except ValidationError as exc:
+            raise ControlError(
+                502, f"{method} {path}: an answer that does not fit ({exc})", data
+            ) from None
+        return data
+
+    def _answers(self, model: type[BaseModel], path: str) -> list[Any]:
+        """A GET answering a list, each item parsed by ``model``."""
+        data = self.request("GET", path)
+        try:
+            _LISTS[model].validate_python(data)
+        except ValidationError as exc:
+            raise ControlError(
+                502, f"GET {path}: an answer that does not fit ({exc})", data
+            ) from None
+        return list(data)
+
     # --- the plant and its devices ---------------------------------------------
 
     def plant(self) -> dict[str, Any]:
-        return dict(self.request("GET", "/plant"))
+        return dict(self._answer(replies.PlantJson, "GET", "/plant"))
 
     def devices(self) -> list[dict[str, Any]]:
         return list(self.plant()["devices"])
 
     def status(self, device: str) -> dict[str, Any]:
-        return dict(self.request("GET", f"/devices/{_name(device)}"))
+        return dict(self._answer(replies.StatusJson, "GET", f"/devices/{_name(device)}"))
 
     def leds(self, device: str) -> dict[str, str]:
-        return dict(self.request("GET", f"/devices/{_name(device)}/leds"))
+        return dict(self._answer(replies.Leds, "GET", f"/devices/{_name(device)}/leds"))
 
     def inputs(self, device: str) -> list[dict[str, Any]]:
-        return list(self.request("GET", f"/devices/{_name(device)}/inputs"))
+        return self._answers(replies.InputJson, f"/devices/{_name(device)}/inputs")
 
     def set_input(self, device: str, name: str, value: bool | float | str) -> dict[str, Any]:
         path = f"/devices/{_name(device)}/inputs/{_name(name)}"
-        return dict(self.request("PUT", path, {"value": value}))
+        return dict(self._answer(replies.InputSet, "PUT", path, {"value": value}))
 
     def drive(self, device: str, name: str, signal: Mapping[str, object]) -> dict[str, Any]:
         """Drive an input by a signal table, as the plant file writes it."""
         path = f"/devices/{_name(device)}/inputs/{_name(name)}"
-        return dict(self.request("PUT", path, {"signal": dict(signal)}))
+        return dict(self._answer(replies.InputSet, "PUT", path, {"signal": dict(signal)}))
 
     def faults(self, device: str) -> list[dict[str, Any]]:
         """Each fault that applies, with ``active`` and the ``params`` it is in force with."""
-        return list(self.request("GET", f"/devices/{_name(device)}/faults"))
+        return self._answers(replies.FaultJson, f"/devices/{_name(device)}/faults")
 
     def outputs(self, device: str) -> list[dict[str, Any]]:
         """Each output the device drives: ``value`` in its ``unit``, the ``raw`` word beside."""
-        return list(self.request("GET", f"/devices/{_name(device)}/outputs"))
+        return self._answers(replies.OutputJson, f"/devices/{_name(device)}/outputs")
 
     def set_fault(
         self, device: str, name: str, active: bool = True, **params: float
     ) -> dict[str, Any]:
         path = f"/devices/{_name(device)}/faults/{_name(name)}"
-        return dict(self.request("PUT", path, {"active": active, "params": params}))
+        return dict(
+            self._answer(replies.FaultSet, "PUT", path, {"active": active, "params": params})
+        )
 
     def clear_fault(self, device: str, name: str) -> dict[str, Any]:
-        return dict(self.request("DELETE", f"/devices/{_name(device)}/faults/{_name(name)}"))
+        return dict(
+            self._answer(
+                replies.FaultSet, "DELETE", f"/devices/{_name(device)}/faults/{_name(name)}"
+            )
+        )
 
     def objects(self, device: str) -> list[str]:
         return list(self.request("GET", f"/devices/{_name(device)}/objects"))
 
     def read(self, device: str, name: str) -> int:
         """A master's read (a TES's memorized inputs are restored by it)."""
-        reply = self.request("GET", f"/devices/{_name(device)}/objects/{_name(name)}")
+        reply = self._answer(
+            replies.ObjectValue, "GET", f"/devices/{_name(device)}/objects/{_name(name)}"
+        )
         return int(reply["value"])
 
     def peek(self, device: str, name: str) -> int:
         path = f"/devices/{_name(device)}/objects/{_name(name)}"
-        return int(self.request("GET", path, params={"peek": "true"})["value"])
+        return int(self._answer(replies.ObjectValue, "GET", path, params={"peek": "true"})["value"])
 
     def write(self, device: str, name: str, value: int) -> int:
         path = f"/devices/{_name(device)}/objects/{_name(name)}"
-        return int(self.request("PUT", path, {"value": value})["value"])
+        return int(self._answer(replies.ObjectValue, "PUT", path, {"value": value})["value"])
 
     def power_cycle(self, device: str) -> dict[str, Any]:
-        return dict(self.request("POST", f"/devices/{_name(device)}/power-cycle"))
+        return dict(
+            self._answer(replies.PowerCycled, "POST", f"/devices/{_name(device)}/power-cycle")
+        )
 
     # --- the PLC -------------------------------------------------------------------
 
@@ -212,10 +249,10 @@ class Client:
             body["text"] = text
         if length is not None:
             body["length"] = length
-        return dict(self.request("POST", "/exchanges", body))
+        return dict(self._answer(replies.ExchangeJson, "POST", "/exchanges", body))
 
     def exchange(self, ident: int) -> dict[str, Any]:
-        return dict(self.request("GET", f"/exchanges/{ident}"))
+        return dict(self._answer(replies.ExchangeJson, "GET", f"/exchanges/{ident}"))
 
     def wait_exchange(self, ident: int, timeout_s: float = 30.0) -> dict[str, Any]:
         """Poll until the exchange is done (bounded by ``timeout_s`` wall seconds)."""
@@ -236,21 +273,21 @@ class Client:
         return self._mode("/plc/power-break", {"seconds": seconds}, wait, wait_s)
 
     def remove(self, module: str) -> dict[str, Any]:
-        return dict(self.request("POST", "/plc/remove", {"module": module}))
+        return dict(self._answer(replies.ModuleJson, "POST", "/plc/remove", {"module": module}))
 
     def insert(self, module: str) -> dict[str, Any]:
-        return dict(self.request("POST", "/plc/insert", {"module": module}))
+        return dict(self._answer(replies.ModuleJson, "POST", "/plc/insert", {"module": module}))
 
     # --- the clock -----------------------------------------------------------------
 
     def clock(self) -> dict[str, Any]:
-        return dict(self.request("GET", "/clock"))
+        return dict(self._answer(replies.ClockJson, "GET", "/clock"))
 
     def pause(self) -> dict[str, Any]:
-        return dict(self.request("POST", "/clock/pause"))
+        return dict(self._answer(replies.ClockEvent, "POST", "/clock/pause"))
 
     def resume(self) -> dict[str, Any]:
-        return dict(self.request("POST", "/clock/resume"))
+        return dict(self._answer(replies.ClockEvent, "POST", "/clock/resume"))
 
     def step(
         self, ms: float, *, wait: bool = True, wait_s: float = DEFAULT_MODE_WAIT_S
@@ -269,10 +306,10 @@ class Client:
         body = {**body, "wait": wait, "wait_s": wait_s} if wait else body
         timeout = wait_s + DEFAULT_TIMEOUT_S if wait else None
         extra: dict[str, Any] = {} if timeout is None else {"timeout": timeout}
-        return dict(self.request("POST", path, body, **extra))
+        return dict(self._answer(replies.ClockEvent, "POST", path, body, **extra))
 
     def set_speed(self, speed: float | str) -> dict[str, Any]:
-        return dict(self.request("PUT", "/clock/speed", {"speed": speed}))
+        return dict(self._answer(replies.ClockEvent, "PUT", "/clock/speed", {"speed": speed}))
 
     # --- the console and the events ------------------------------------------------------
 
@@ -281,7 +318,7 @@ class Client:
         body: dict[str, object] = {"line": line, "wait_s": wait_s}
         if text is not None:
             body["text"] = text
-        reply = self.request("POST", "/console", body, timeout=wait_s + 5)
+        reply = self._answer(replies.ConsoleAnswer, "POST", "/console", body, timeout=wait_s + 5)
         return ConsoleResult(list(reply["lines"]), reply["error"])
 
     def events(
@@ -318,5 +355,10 @@ class Client:
 
         return EventStream(opened, timeout_s)
 
+
+_LISTS: dict[type[BaseModel], TypeAdapter[list[Any]]] = {
+    model: TypeAdapter(list[model])  # type: ignore[valid-type]
+    for model in (replies.InputJson, replies.FaultJson, replies.OutputJson)
+}
 
 __all__ = ["Client", "ConsoleResult", "ControlError", "EventStream"]

@@ -3,15 +3,14 @@
 ``GET /`` is the page, rendered from the Jinja2 template ``templates/dashboard.html``;
 ``/static/...`` its scripts, styles and the vendored uPlot (every file ships in
 the package: no CDN); ``GET /docs`` the API's document in Swagger UI, vendored too.
-``GET /dashboard/state`` gives, in one answer, what the
-page draws (fieldtwin.control.panels), as one command through the inbox like
-every other request: the page never touches the simulation, and everything it
-changes goes through the control API's own resources.
+``GET /dashboard/state`` (fieldtwin.control.routers.dashboard) gives, in one
+answer, what the page draws (fieldtwin.control.panels), from the snapshot the
+simulation published like every other read: the page never touches the
+simulation, and everything it changes goes through the control API's own resources.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -20,8 +19,6 @@ from fastapi.responses import HTMLResponse
 from fastapi.staticfiles import StaticFiles
 
 from fieldtwin import __version__
-from fieldtwin.control.panels import panels
-from fieldtwin.control.resources import Control
 
 HERE = Path(__file__).resolve().parent
 STATIC = HERE / "static"
@@ -37,7 +34,7 @@ def _rate(text: str | None) -> int:
     return max(MIN_RATE, min(MAX_RATE, value))
 
 
-def add_dashboard(app: FastAPI, control: Control, run: Callable[..., Any]) -> None:
+def add_dashboard(app: FastAPI) -> None:
     templates: list[Any] = []  # Jinja2 loaded at the first page (not at `fieldtwin run`'s start)
 
     def template() -> Any:
@@ -62,10 +59,6 @@ def add_dashboard(app: FastAPI, control: Control, run: Callable[..., Any]) -> No
                 "rate": _rate(request.query_params.get("rate")),
             },
         )
-
-    @app.get("/dashboard/state", summary="the whole plant as the dashboard draws it")
-    async def state() -> Any:
-        return await run(lambda: panels(control))
 
 
 def add_docs(app: FastAPI) -> None:

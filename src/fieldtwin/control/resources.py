@@ -17,6 +17,7 @@ from fieldtwin.clock import MS, S
 from fieldtwin.clock import seconds as to_us
 from fieldtwin.console import Console
 from fieldtwin.console_syntax import module_address
+from fieldtwin.control.snapshot import Snapshot
 from fieldtwin.devices.face import (
     Device,
     DeviceStatus,
@@ -29,6 +30,7 @@ from fieldtwin.devices.face import (
 )
 from fieldtwin.errors import ConfigError, FieldtwinError
 from fieldtwin.plant import Plant
+from fieldtwin.runtime.door import Command
 from fieldtwin.runtime.events import EventBus
 from fieldtwin.runtime.runner import Runner
 from fieldtwin.signals.spec import file_in_spec
@@ -104,6 +106,19 @@ def refuse_files(spec: object, where: str) -> None:
         )
 
 
+class _Stale:
+    """A door observer: the snapshot is stale after every command (read-your-writes)."""
+
+    def __init__(self, snapshot: Snapshot) -> None:
+        self.snapshot = snapshot
+
+    def before(self, command: Command) -> None:
+        pass
+
+    def after(self, command: Command, answer: object, error: BaseException | None) -> None:
+        self.snapshot.changed()
+
+
 class Control:
     """The plant as the control API sees it."""
 
@@ -121,6 +136,11 @@ class Control:
         self._console_started: Future[Json] | None = None  # a mode a console line started
         self._exchanges: OrderedDict[int, _Started] = OrderedDict()
         self._next_exchange = 1
+        # the reads that change nothing, as the simulation's thread last made them
+        self.snapshot = Snapshot()
+        # every command through the plant's door (API, attached console, scenario) makes
+        # it stale before its answer goes out: a later read sees the command's effect
+        plant.door.watch(_Stale(self.snapshot))
 
     # --- the plant and its devices -----------------------------------------------
 
@@ -384,6 +404,7 @@ class Control:
             if then is not None:
                 then()
             back = {"power": "back"} if then is not None else {}
+            self.snapshot.changed()  # before a waiting request has its answer
             ended.set_result(self._clock_event(what, {**back, "cut": cut}))
 
         self.runner.start_mode(name, until, end)

@@ -1,0 +1,55 @@
+"""``/devices/{ident}``: a device's status, LEDs, inputs, outputs, and a TES's power cycle."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter
+
+from fieldtwin.control.replies import InputJson, InputSet, Leds, OutputJson, PowerCycled, StatusJson
+from fieldtwin.control.routers.common import REPLY, Hop
+from fieldtwin.control.schemas import InputBody
+
+
+def router(hop: Hop) -> APIRouter:
+    c = hop.control
+    api = APIRouter(prefix="/devices/{ident}", tags=["devices"])
+
+    @api.get(
+        "",
+        summary="a device's status: state, mode, LEDs, ports, active faults, outputs",
+        **REPLY,
+    )
+    async def status(ident: str) -> StatusJson:
+        return StatusJson.model_validate(await hop.read(("status", ident), lambda: c.status(ident)))
+
+    @api.get("/leds", summary="a device's front-panel LEDs", **REPLY)
+    async def leds(ident: str) -> Leds:
+        return Leds.model_validate(await hop.read(("leds", ident), lambda: c.leds(ident)))
+
+    @api.get("/inputs", summary="a device's inputs", **REPLY)
+    async def inputs(ident: str) -> list[InputJson]:
+        found = await hop.read(("inputs", ident), lambda: c.inputs(ident))
+        return [InputJson.model_validate(one) for one in found]
+
+    @api.put("/inputs/{name}", summary="set an input, or drive it by a signal", **REPLY)
+    async def set_input(ident: str, name: str, body: InputBody) -> InputSet:
+        done = await hop.do("set_input", ident, name, body.value, body.signal)
+        return InputSet.model_validate(done)
+
+    @api.get(
+        "/outputs",
+        summary="every output a device drives, in its units, the raw word beside",
+        responses={404: {"description": "no such device (the message lists the devices)"}},
+        **REPLY,
+    )
+    async def outputs(ident: str) -> list[OutputJson]:
+        found = await hop.read(("outputs", ident), lambda: c.outputs(ident))
+        return [OutputJson.model_validate(one) for one in found]
+
+    @api.post("/power-cycle", summary="a TES: 24 V off and on again", **REPLY)
+    async def power_cycle(ident: str) -> PowerCycled:
+        return PowerCycled.model_validate(await hop.do("power_cycle", ident))
+
+    return api
+
+
+__all__ = ["router"]
