@@ -13,6 +13,7 @@ import pytest
 from fieldtwin.client import Client
 from fieldtwin.control.resources import Control
 from fieldtwin.control.server import ControlServer, bind_control
+from fieldtwin.control.sim import serve
 from fieldtwin.control.snapshot import Snapshot
 from fieldtwin.plant import build_plant, read_plant
 from fieldtwin.runtime.events import EventBus
@@ -64,8 +65,9 @@ def plant() -> Iterator[InProcess]:
     """The default plant, its commands taken by a thread of ours (counted, and held
     while ``serving`` is clear); its snapshot values never too old by the wall."""
     built = build_plant(read_plant(None))
-    inbox = Inbox()
+    inbox = Inbox(door=built.door)  # commands are values the plant's door runs
     control = Control(built, Runner(built.clock, None), EventBus())
+    serve(built.door, control, control.console.handle)
     control.snapshot.max_age_s = 3600.0  # only a change makes a value stale here
     server = ControlServer(control, inbox, bind_control("127.0.0.1", 0, fallback=False), None)
     stop, serving, idle, hops = threading.Event(), threading.Event(), threading.Event(), [0]
