@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import os
+import signal
+from collections.abc import Iterator
 
 import pytest
 from hypothesis import HealthCheck, settings
@@ -37,3 +39,16 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
             test._hypothesis_internal_use_settings = settings(
                 own, max_examples=int(cap), suppress_health_check=quiet
             )
+
+
+@pytest.fixture
+def signal_handlers() -> Iterator[None]:
+    """The process's SIGTERM/SIGINT/SIGALRM handlers and its timer as they were, after
+    the test (fieldtwin run's stop handlers install themselves)."""
+    saved = {n: signal.getsignal(n) for n in (signal.SIGTERM, signal.SIGINT, signal.SIGALRM)}
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        for number, handler in saved.items():
+            signal.signal(number, handler)

@@ -2,10 +2,8 @@
 
 from __future__ import annotations
 
-import signal
 import socket
 import threading
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -13,18 +11,6 @@ import pytest
 from fieldtwin.errors import FieldtwinError
 from fieldtwin.plant import build_plant, read_plant
 from fieldtwin.session import ControlOptions, RunOptions, Session, open_run
-
-
-@pytest.fixture
-def handlers() -> Iterator[None]:
-    """open_run installs its SIGTERM/SIGINT/SIGALRM handlers: put the test's back."""
-    saved = {n: signal.getsignal(n) for n in (signal.SIGTERM, signal.SIGINT, signal.SIGALRM)}
-    try:
-        yield
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        for number, handler in saved.items():
-            signal.signal(number, handler)
 
 
 def _free_port() -> int:
@@ -52,7 +38,7 @@ def test_close_undoes_every_step_last_first_even_when_one_fails() -> None:
 
 
 def test_a_port_that_cannot_open_closes_what_the_run_had_opened(
-    tmp_path: Path, handlers: None
+    tmp_path: Path, signal_handlers: None
 ) -> None:
     busy = socket.socket()
     busy.bind(("127.0.0.1", 0))
@@ -84,7 +70,7 @@ def test_a_port_that_cannot_open_closes_what_the_run_had_opened(
     assert (tmp_path / "trace.jsonl").exists()
 
 
-def test_a_run_binds_every_port_after_its_windows(tmp_path: Path, handlers: None) -> None:
+def test_a_run_binds_every_port_after_its_windows(tmp_path: Path, signal_handlers: None) -> None:
     port = _free_port()
     plant = tmp_path / "plant.toml"
     plant.write_text(

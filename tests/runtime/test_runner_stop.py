@@ -5,7 +5,6 @@ signal handler of ``fieldtwin run`` is exercised."""
 from __future__ import annotations
 
 import signal
-from collections.abc import Iterator
 
 import pytest
 
@@ -108,18 +107,6 @@ def test_a_stop_queued_as_the_first_command_ends_the_run_before_any_time_passes(
         inbox.close()
     assert clock.now == 0 and wall.now == START and wall.waits == []
     assert not runner.stopping
-
-
-@pytest.fixture
-def signal_handlers() -> Iterator[None]:
-    """The process's handlers and timer as they were, after the test."""
-    saved = {n: signal.getsignal(n) for n in (signal.SIGTERM, signal.SIGINT, signal.SIGALRM)}
-    try:
-        yield
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        for number, handler in saved.items():
-            signal.signal(number, handler)
 
 
 @pytest.mark.skipif(not hasattr(signal, "setitimer"), reason="POSIX signals")
