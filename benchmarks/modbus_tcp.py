@@ -95,19 +95,9 @@ def _client_count(port: int, count: int) -> None:
 def workload(kind: str, requests: int, connections: int = 8) -> None:
     """The counted work: our server answering ``requests`` FC03 from ``connections``
     client processes (started with exec, so a counter does not follow them)."""
-    clock = SimClock()
-    devices: list[SlaveDevice]
-    if kind == "tes":
-        from fieldtwin.tes import Tes
-
-        devices = [Tes("32EST", UNIT, clock=clock)]
-    else:
-        devices = [Table(UNIT)]
-    runner = Runner(clock, speed=1.0)
-    listener = listen("127.0.0.1", 0)
-    serve_tcp(runner, listener, devices)
+    runner, port = _our_server(kind)
     each = requests // connections
-    command = [sys.executable, __file__, "--client", str(listener.address[1]), str(each)]
+    command = [sys.executable, __file__, "--client", str(port), str(each)]
     clients = [subprocess.Popen(command) for _ in range(connections)]
     deadline = time.monotonic() + 1800
 
@@ -127,7 +117,8 @@ def _free_port() -> int:
         return int(sock.getsockname()[1])
 
 
-def _serve_ours(kind: str, ports: Queue[int]) -> None:
+def _our_server(kind: str) -> tuple[Runner, int]:
+    """Our Modbus TCP server of one device (a table, or a TES 32EST) on a free port."""
     clock = SimClock()
     devices: list[SlaveDevice]
     if kind == "tes":
@@ -139,7 +130,12 @@ def _serve_ours(kind: str, ports: Queue[int]) -> None:
     runner = Runner(clock, speed=1.0)
     listener = listen("127.0.0.1", 0)
     serve_tcp(runner, listener, devices)
-    ports.put(listener.address[1])
+    return runner, listener.address[1]
+
+
+def _serve_ours(kind: str, ports: Queue[int]) -> None:
+    runner, port = _our_server(kind)
+    ports.put(port)
     runner.run_forever()
 
 
