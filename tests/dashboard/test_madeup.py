@@ -4,25 +4,18 @@ loop is, with its hint, lit when set with curl) and its output in volts, from a 
 
 from __future__ import annotations
 
-import contextlib
 import json
-import queue
-import re
-import subprocess
 import sys
-import threading
-import time
 import urllib.request
 from collections.abc import Iterator
 from typing import Any
 
 import pytest
 
-from tests.control.plantproc import ROOT, Running
+from tests.control.plantproc import ROOT, Running, fieldtwin_run_with
 from tests.dashboard.pages import open_controls, open_dashboard
 from tests.devices.madeup import LEVEL
 
-START_S = 60.0
 RUN = "import sys, tests.devices.madeup; from fieldtwin.cli import main; sys.exit(main())"
 PLANT = f"""
 [plc]
@@ -36,45 +29,12 @@ inputs = {{ "0" = 2.0 }}
 """
 
 
-def _read(stream: Any, lines: queue.Queue[str]) -> None:
-    with contextlib.suppress(ValueError, OSError):
-        for line in stream:
-            lines.put(line)
-
-
 @pytest.fixture(scope="module")
 def plant(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Running]:
     path = tmp_path_factory.mktemp("madeup") / "plant.toml"
     path.write_text(PLANT)
-    proc = subprocess.Popen(
-        [sys.executable, "-c", RUN, "run", str(path), "--no-live", "--control-port", "0"],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        cwd=ROOT,
-    )
-    running = Running(proc)
-    try:
-        assert proc.stdout is not None
-        lines: queue.Queue[str] = queue.Queue()
-        threading.Thread(target=_read, args=(proc.stdout, lines), daemon=True).start()
-        deadline = time.monotonic() + START_S
-        while not running.lines or not running.lines[-1].startswith("attach: "):
-            assert time.monotonic() < deadline, f"no start within {START_S} s: {running.lines}"
-            assert proc.poll() is None, f"fieldtwin run ended: {running.lines}"
-            with contextlib.suppress(queue.Empty):
-                line = lines.get(timeout=0.5).rstrip("\n")
-                running.lines.append(line)
-                if m := re.match(r"control: (http://\S+)$", line):
-                    running.url = m.group(1)
+    with fieldtwin_run_with([sys.executable, "-c", RUN], path, ROOT, None) as running:
         yield running
-    finally:
-        proc.terminate()
-        try:
-            proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait(timeout=10)
 
 
 def _put(plant: Running, path: str, body: object) -> Any:
