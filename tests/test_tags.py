@@ -158,7 +158,8 @@ def test_a_plant_without_tags_has_none(tmp_path: Path) -> None:
         ('[[tag]]\nname = "a"', "not neither"),
         (
             '[[tag]]\nname = "a"\nobject = "W0"\nscale = [0, 0, 1, 2]',
-            "plant.toml: tag[0].scale: raw_lo and raw_hi are both 0",
+            "plant.toml: tag[0].scale: raw_lo and raw_hi are both 0"
+            " (allowed: two different values)",
         ),
         (
             '[[tag]]\nname = "a"\nobject = "W0"\nscale = { factor = 2 }',

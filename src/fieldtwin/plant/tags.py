@@ -534,6 +534,26 @@ def tag_value(plant: Plant, tag: Tag) -> TagValue:
     return TagValue(tag, value, raw, tag.unit or unit)
 
 
+def raw_value(tag: Tag, value: float) -> float:
+    """A number in the tag's unit, back to the source's (the scale's inverse)."""
+    scale = tag.scale
+    if scale is None:
+        return value
+    ratio = (value - scale.eng_lo) / (scale.eng_hi - scale.eng_lo)
+    return scale.raw_lo + ratio * (scale.raw_hi - scale.raw_lo)
+
+
+def raw_word(tag: Tag, value: float) -> int:
+    """A number in the tag's unit as the raw word its object or register takes."""
+    number = round(raw_value(tag, value))
+    if not -32768 <= number <= 0xFFFF:
+        raise ConfigError(
+            f"tag {tag.name}: {value:g} {tag.unit} is {number} raw, not a word"
+            " (allowed -32768..65535 raw)"
+        )
+    return number & 0xFFFF if number < 0 else number
+
+
 def read_value(plant: Plant, name: str) -> TagValue:
     """``resolve(plant, name)``'s value now."""
     return tag_value(plant, resolve(plant, name))
@@ -605,6 +625,8 @@ __all__ = [
     "TagValue",
     "Tags",
     "UnknownTag",
+    "raw_value",
+    "raw_word",
     "read_tags",
     "read_value",
     "resolve",
