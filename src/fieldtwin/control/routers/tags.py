@@ -52,7 +52,7 @@ class TrendJson(Reply):
     series: str
     source_text: str
     unit: str
-    points: list[tuple[float, TagNumber | None]]
+    points: list[list[TagNumber | None]]  # [t_s, value]
 
 
 class TagBody(Closed):
