@@ -10,7 +10,7 @@ from pathlib import Path
 import httpx
 import pytest
 
-from tests.control.plantproc import Running, default_plant_copy, fieldtwin_run
+from tests.control.plantproc import Running, fieldtwin_run
 
 WAIT_S = 10.0
 
@@ -128,9 +128,9 @@ def test_a_trend_keeps_its_history_from_before_it_was_asked(tagged: Running) -> 
             time.sleep(0.1)
         times = [p[0] for p in points]
         assert times == sorted(times) and times[0] < times[-1]
-        assert all(p[1] == pytest.approx(p[1]) for p in points)
+        assert all(p[1] is not None and 2.9 <= p[1] <= 4.6 for p in points)  # bar: 3, or 4.5
         since = http.get("/trends/pressure", params={"since": times[-2]}).json()
-        assert since["unit"] == "bar" and [p[0] for p in since["points"]][0] > times[-2]
+        assert since["unit"] == "bar" and since["points"][0][0] > times[-2]
         # an object asked for later is kept from then on
         asked = http.get("/trends/W1").json()
         assert asked["series"] == "W1" and len(asked["points"]) == 1

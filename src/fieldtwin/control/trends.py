@@ -121,4 +121,35 @@ class Trends:
         return [p for p in points if p[0] > since_s]
 
 
-__all__ = ["MAX_POINTS", "MAX_SERIES", "SAMPLE_US", "TooManySeries", "Trends"]
+def tags_panel(plant: Plant) -> dict[str, object]:
+    """What the dashboard shows of the tags: each tag's value now (``tags``), the default
+    trends (``trend_defaults``) and, for a default trend that is an object without a
+    tag, its value too (in ``tags``, with ``"object": true``)."""
+    out: list[dict[str, object]] = []
+    for tag in plant.tags:
+        out.append(_json(plant, tag))
+    for name in plant.tags.trends:
+        if plant.tags.get(name) is None:
+            try:
+                out.append({**_json(plant, resolve(plant, name)), "object": True})
+            except FieldtwinError:
+                continue
+    return {"tags": out, "trend_defaults": list(plant.tags.trends)}
+
+
+def _json(plant: Plant, tag: Tag) -> dict[str, object]:
+    try:
+        return tag_value(plant, tag).json()
+    except FieldtwinError:  # a module out of its slot
+        return {
+            "name": tag.name,
+            "source_text": tag.source.text,
+            "unit": tag.unit,
+            "description": tag.description,
+            "value": None,
+            "raw": None,
+            "text": "-",
+        }
+
+
+__all__ = ["MAX_POINTS", "MAX_SERIES", "SAMPLE_US", "TooManySeries", "Trends", "tags_panel"]
