@@ -205,8 +205,7 @@ class Console:
         return [self._read_one(name) for name in args]
 
     def _read_one(self, name: str) -> str:
-        """``IW5,0 = H'1008'``; a tag: ``tank1.level = 5001 mm  (W1)``, and an object a
-        tag names shows it: ``W1 = 5001  (tank1.level)``."""
+        """``IW5,0 = H'1008'`` (as ever, tagged or not); a tag: ``tank1.level = 5001 mm  (W1)``."""
         tag = self.plant.tags.get(name)
         if tag is not None:
             return f"{tag.name} = {tag_value(self.plant, tag).text}  ({tag.source.text})"
@@ -221,8 +220,7 @@ class Console:
                     f" (tags: {self.plant.tags.allowed()}): {exc}"
                 ) from None
             raise
-        named = self.plant.tags.of_object(name)
-        return f"{line}  ({named.name})" if named is not None else line
+        return line
 
     def _show(self, name: str) -> str:
         value = self.plc.read(name)

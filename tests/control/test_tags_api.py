@@ -107,7 +107,7 @@ def test_the_console_reads_and_sets_by_tag(tagged: Running) -> None:
     with client(tagged) as http:
         http.put("/tags/level", json={"value": 4})
         read = http.post("/console", json={"line": "read level W0"}).json()
-        assert read == {"lines": ["level = 4 m  (W0)", "W0 = 4000  (level)"], "error": None}
+        assert read == {"lines": ["level = 4 m  (W0)", "W0 = 4000"], "error": None}
         done = http.post("/console", json={"line": "input pump3.run off"}).json()
         assert done["error"] is None and done["lines"] == ["input pump3.run 0 = off"]
         deadline = time.monotonic() + WAIT_S
