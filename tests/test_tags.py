@@ -162,6 +162,11 @@ def test_a_plant_without_tags_has_none(tmp_path: Path) -> None:
             " (allowed: two different values)",
         ),
         (
+            '[[tag]]\nname = "a"\nobject = "W0"\nscale = [0, 10, 5, 5]',
+            "plant.toml: tag[0].scale: eng_lo and eng_hi are both 5"
+            " (allowed: two different values)",
+        ),
+        (
             '[[tag]]\nname = "a"\nobject = "W0"\nscale = { factor = 2 }',
             "plant.toml: tag[0].scale: {'factor': 2} not allowed (allowed: four numbers"
             " [raw_lo, raw_hi, eng_lo, eng_hi]",
@@ -209,5 +214,26 @@ def test_the_default_plant_tells_its_story() -> None:
         level = read_value(plant, "tank0.level")
         assert level.unit == "mm" and 500 <= level.value <= 8500  # type: ignore[operator]
         assert level.value == read_value(plant, "tank0.level.channel").value
+    finally:
+        plant.close()
+
+
+def test_the_wide_live_view_names_the_tags_in_their_units() -> None:
+    from rich.console import Console
+
+    from fieldtwin.live import render, tags_lines
+
+    plant = load_plant(None)
+    try:
+        plant.clock.advance(20_000_000)
+        line = tags_lines(plant)[0].plain
+        assert line.startswith("tags: tank0.level ") and " mm  tank1.level " in line
+        assert "tank1.flow 16 l/min" in line and line.endswith("(+1)")  # 24 of 25 named
+        wide = Console(width=160, height=80, record=True)
+        wide.print(render(plant, []))
+        assert "tags: tank0.level" in wide.export_text()
+        narrow = Console(width=80, height=24, record=True)  # the default plant fits 80 x 24
+        narrow.print(render(plant, []))
+        assert "tags:" not in narrow.export_text()
     finally:
         plant.close()

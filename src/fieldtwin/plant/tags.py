@@ -313,10 +313,14 @@ def _scale(value: object, where: str) -> Scale | None:
             " eng_hi], e.g. [0, 20000, 0, 20])"
         )
     raw_lo, raw_hi, eng_lo, eng_hi = (float(v) for v in value)
-    if raw_lo == raw_hi:
-        raise ConfigError(
-            f"{where}: raw_lo and raw_hi are both {raw_lo:g} (allowed: two different raw values)"
-        )
+    for lo, hi, a, b in (
+        ("raw_lo", "raw_hi", raw_lo, raw_hi),
+        ("eng_lo", "eng_hi", eng_lo, eng_hi),
+    ):
+        if a == b:
+            raise ConfigError(
+                f"{where}: {lo} and {hi} are both {a:g} (allowed: two different values)"
+            )
     return Scale(raw_lo, raw_hi, eng_lo, eng_hi)
 
 
