@@ -237,3 +237,38 @@ def test_the_wide_live_view_names_the_tags_in_their_units() -> None:
         assert "tags:" not in narrow.export_text()
     finally:
         plant.close()
+
+
+def test_a_trend_ring_is_bounded_and_sampled_at_most_every_period(tmp_path: Path) -> None:
+    from fieldtwin.control.trends import MAX_SERIES, TooManySeries, Trends
+
+    plant = load_plant(plant_with(tmp_path, TAGS))
+    try:
+        assert plant.plc is not None
+        trends = Trends(plant, sample_us=500_000, max_points=3)
+        assert trends.names() == [
+            "level",
+            "lamp",
+            "channel0",
+            "switch",
+            "pressure",
+            "watchdog",
+            "W4",
+        ]
+        level = plant.tags.named("level")
+        for step, word in enumerate((1000, 2000, 3000, 4000, 5000)):
+            plant.plc.write("W0", word)
+            trends.sample(step * 500_000)
+            trends.sample(step * 500_000 + 100_000)  # within the period: not sampled
+        assert trends.points(level) == [(1.0, 3.0), (1.5, 4.0), (2.0, 5.0)]  # the last 3
+        assert trends.points(level, since_s=1.5) == [(2.0, 5.0)]
+        assert trends.track("w4").name == "W4" and "W4" in trends.names()
+        assert trends.tag("W0") is level  # an object by its tag's source
+        for k in range(MAX_SERIES - 1):
+            trends.track(f"W{100 + k}")
+        with pytest.raises(TooManySeries, match=f"{MAX_SERIES} series are kept"):
+            trends.track("W999")
+        with pytest.raises(UnknownTag):
+            trends.track("nope")
+    finally:
+        plant.close()

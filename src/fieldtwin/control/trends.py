@@ -81,9 +81,10 @@ class Trends:
     def tag(self, name: str) -> Tag | None:
         """The series ``name`` if it is kept (any thread)."""
         key = name.strip().lower()
-        found = self._series.get(key)
-        if found is None:  # an object asked for by another spelling: "iw5,3"
-            found = next((t for t in self._series.values() if t.source.name == name), None)
+        with self._lock:
+            found = self._series.get(key)
+            if found is None:  # an object by its source's spelling: "IW5,3" of a tag
+                found = next((t for t in self._series.values() if t.source.name == name), None)
         return found
 
     def names(self) -> list[str]:
