@@ -13,6 +13,7 @@ command naming a file is refused, naming the verb (docs/control.md).
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Callable, Iterable
 from typing import ClassVar, TextIO
 
@@ -38,6 +39,7 @@ from fieldtwin.devices.face import Device, DeviceStatus, Family, device_id
 from fieldtwin.errors import ConfigError, FieldtwinError
 from fieldtwin.live import device_line
 from fieldtwin.plant import Plant
+from fieldtwin.plant.tags import Tag, raw_value, raw_word, tag_value
 from fieldtwin.runtime.door import Command
 from fieldtwin.signals.spec import file_in_spec
 from fieldtwin.tsx.addressing import parse_object
@@ -46,17 +48,17 @@ from fieldtwin.tsx.txt import ExchangeTimeout
 from fieldtwin.words import format_hex, parse_word
 
 HELP = {
-    "read": "read OBJECT...            IW5,0  OW5,0,C  I5,3  I5,S  W100"
-    " (a name alone reads it too)",
-    "write": "write OBJECT VALUE        OW5,0,C 1   OW5,1 H'00FF'   O5,2 1   W100 30"
-    "   (outputs OW/O and internal W, B, CW, SY, SW; inputs are read-only)",
+    "read": "read OBJECT|TAG...        IW5,0  OW5,0,C  I5,3  I5,S  W100  tank1.level"
+    " (a name alone reads it too; a tag in its unit)",
+    "write": "write OBJECT|TAG VALUE    OW5,0,C 1   OW5,1 H'00FF'   O5,2 1   W100 30"
+    "   (outputs OW/O and internal W, B, CW, SY, SW; inputs are read-only; a tag in its unit)",
     "exchange": 'exchange M C [send W...] [text "..."] [length L] [recv N] [txt I] [timeout S]\n'
     "                           e.g. exchange H'0563' H'40' send H'00A0' 30 recv 0",
     "advance": "advance DURATION          advance 11   advance 250ms   advance 2min",
     "time": "time                      the simulated time",
     "status": "status [MODULE]           module state, mode, LEDs, registers (MODULE = 5 or 23)",
     "input": "input MODULE NAME VALUE  set an input as the module takes it"
-    " (input 5 0 2.5V, input 4 3 1, input 7 0.CTS 0)",
+    " (input 5 0 2.5V, input 4 3 1, input 7 0.CTS 0); input TAG VALUE for a tagged input",
     "signal": "signal MODULE NAME KIND key=value...\n"
     "                           e.g. signal 5 0 sine offset=5 amplitude=2 period_s=60",
     "fault": "fault MODULE NAME on|off [key=value...]  inject or clear a fault;"
@@ -191,7 +193,7 @@ class Console:
         command = self._commands.get(name)
         if command is not None:
             return command(args)
-        if looks_like_object(words[0]):
+        if looks_like_object(words[0]) or self.plant.tags.get(words[0]) is not None:
             return self._read(words)
         raise ConfigError(f"unknown command {words[0]!r} (allowed: {', '.join(HELP)})")
 
@@ -199,8 +201,26 @@ class Console:
 
     def _read(self, args: list[str]) -> list[str]:
         if not args:
-            raise ConfigError("read: name at least one object, e.g. read IW5,0")
-        return [f"{canonical_name(name)} = {self._show(name)}" for name in args]
+            raise ConfigError("read: name at least one object or tag, e.g. read IW5,0")
+        return [self._read_one(name) for name in args]
+
+    def _read_one(self, name: str) -> str:
+        """``IW5,0 = H'1008'`` (as ever, tagged or not); a tag: ``tank1.level = 5001 mm  (W1)``."""
+        tag = self.plant.tags.get(name)
+        if tag is not None:
+            return f"{tag.name} = {tag_value(self.plant, tag).text}  ({tag.source.text})"
+        if self.plant.plc is None and self.plant.tags:
+            raise ConfigError(f"read: no tag {name!r} (allowed: {self.plant.tags.allowed()})")
+        try:
+            line = f"{canonical_name(name)} = {self._show(name)}"
+        except ConfigError as exc:
+            if self.plant.tags and not looks_like_object(name):
+                raise ConfigError(
+                    f"read: {name!r} is neither an object nor a tag"
+                    f" (tags: {self.plant.tags.allowed()}): {exc}"
+                ) from None
+            raise
+        return line
 
     def _show(self, name: str) -> str:
         value = self.plc.read(name)
@@ -213,8 +233,34 @@ class Console:
         if len(args) != 2:
             raise ConfigError("write: takes OBJECT VALUE, e.g. write OW5,0,C 1")
         name, token = args
+        tag = self.plant.tags.get(name)
+        if tag is not None:
+            return self._write_tag(tag, token)
         self.plc.write(name, parse_word(token))
         return [f"{canonical_name(name)} = {self._show(name)}"]
+
+    def _write_tag(self, tag: Tag, token: str) -> list[str]:
+        """``write tank1.level 2.5``: a number in the tag's unit, back to its raw word."""
+        source = tag.source
+        if source.kind in ("input", "output"):
+            verb = "input" if source.kind == "input" else "write"
+            raise ConfigError(
+                f"write: {tag.name} is the {source.kind} {source.text}"
+                + (
+                    f" (allowed: {verb} {tag.name} VALUE)"
+                    if verb == "input"
+                    else " of a device (allowed: a tag of an object or a register)"
+                )
+            )
+        try:
+            raw = raw_word(tag, float(token)) if tag.scale is not None else parse_word(token)
+        except ValueError:
+            raise ConfigError(f"write {tag.name}: {token!r} is not a number") from None
+        if source.device is None:
+            self.plc.write(source.name, raw)
+        else:
+            self._module(source.device).objects().write(source.name, raw)
+        return [self._read_one(tag.name)]
 
     # --- Text Blocks -----------------------------------------------------------
 
@@ -349,9 +395,30 @@ class Console:
         return lines
 
     def _input(self, args: list[str]) -> list[str]:
+        if len(args) == 2 and (tag := self.plant.tags.get(args[0])) is not None:
+            return self._input_tag(tag, args[1])
         if len(args) != 3:
-            raise ConfigError("input: takes MODULE CHANNEL VALUE, e.g. input 5 0 2.5V")
+            raise ConfigError(
+                "input: takes MODULE CHANNEL VALUE, e.g. input 5 0 2.5V, or TAG VALUE"
+                + (f" (tags: {self.plant.tags.allowed()})" if self.plant.tags else "")
+            )
         return set_input(self._module(args[0]), f"input {args[0]}", args[1:])
+
+    def _input_tag(self, tag: Tag, token: str) -> list[str]:
+        """``input pump3.run on``: the tagged input set as its device takes it (a plain
+        number of a scaled tag is in the tag's unit)."""
+        source = tag.source
+        if source.kind != "input" or source.device is None:
+            raise ConfigError(
+                f"input: {tag.name} is {source.text}, not an input"
+                f" (allowed: write {tag.name} VALUE for an object or a register)"
+            )
+        value = token
+        if tag.scale is not None:
+            with contextlib.suppress(ValueError):  # "12mA", "on": as the device takes it
+                value = f"{raw_value(tag, float(token)):g}"
+        device = self._module(source.device)
+        return set_input(device, f"input {tag.name}", [source.name, value])
 
     def _signal(self, args: list[str]) -> list[str]:
         if len(args) < 3:

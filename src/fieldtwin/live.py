@@ -23,6 +23,7 @@ from fieldtwin.clock import S
 from fieldtwin.devices.face import Device, DeviceStatus, Family, reading_text
 from fieldtwin.errors import FieldtwinError
 from fieldtwin.plant import Plant
+from fieldtwin.plant.tags import tag_value
 from fieldtwin.runtime.runner import Runner
 from fieldtwin.tsx.plc import Plc
 
@@ -103,9 +104,28 @@ def _render(plant: Plant, endpoints: list[str], width: int, runner: Runner | Non
             parts.extend(_fronts(devices))
     if width >= WIDE:
         parts.extend(_fronts([d for _, _, d in _module_devices(plant)], readings_only=True))
+        parts.extend(tags_lines(plant))
     parts.extend(Text(line, "cyan", overflow="fold") for line in endpoints)
     parts.append(Text("Ctrl-C to stop", "dim"))
     return Group(*parts)
+
+
+MAX_TAGS_SHOWN = 24  # tags the wide live view names (the dashboard and GET /tags show all)
+
+
+def tags_lines(plant: Plant) -> list[Text]:
+    """The plant's tags by name, each in its unit: ``tags: tank0.level 6411 mm  ...``."""
+    if not plant.tags:
+        return []
+    shown = []
+    for tag in list(plant.tags)[:MAX_TAGS_SHOWN]:
+        try:
+            shown.append(f"{tag.name} {tag_value(plant, tag).text}")
+        except FieldtwinError:  # a module out of its slot
+            shown.append(f"{tag.name} -")
+    more = len(plant.tags) - len(shown)
+    text = "tags: " + "  ".join(shown) + (f"  (+{more})" if more > 0 else "")
+    return [Text(text, "magenta", overflow="fold")]
 
 
 def _table(title: str, width: int) -> Table:

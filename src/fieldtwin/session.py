@@ -294,6 +294,8 @@ def _serve(session: Session, options: RunOptions, live: bool) -> None:
     def tick(now: int) -> None:
         if control is not None:
             control.observer.sample(now)
+            if control.trends is not None:
+                control.trends.sample(now)
         if end is not None and now >= end:
             runner.stop()
         if live_view is not None:

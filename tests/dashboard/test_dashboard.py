@@ -111,6 +111,9 @@ def test_a_trend_of_a_changing_value_draws_points_and_exports_csv(
     page: Any, plant: Running
 ) -> None:
     open_dashboard(page, plant, rate=10)
+    # the default plant opens with its four tank levels trended: cleared, this one is alone
+    page.wait_for_function("window.__fieldtwinTrends.series.length === 4")
+    page.click("#trend-clear")
     page.select_option("#trend-pick", "tes2:a0:V")  # a sine, 5 +- 4 V over 60 s
     page.click("#trend-add")
     page.wait_for_function(

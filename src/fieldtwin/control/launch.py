@@ -16,6 +16,7 @@ from fieldtwin.control.server import (
     new_token,
 )
 from fieldtwin.control.sim import serve
+from fieldtwin.control.trends import Trends
 from fieldtwin.errors import ConfigError
 from fieldtwin.plant import Plant
 from fieldtwin.runtime.events import EventBus
@@ -35,6 +36,7 @@ class Launched:
     lines: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
     withdraw: Callable[[], None] | None = None  # the door's control commands, withdrawn
+    trends: Trends | None = None  # the series' rings, sampled on each tick (trends.py)
 
     @property
     def url(self) -> str:
@@ -75,6 +77,7 @@ def launch(
     server = ControlServer(control, inbox, sock, token, allow_origins=origins)
     runner.take_commands(inbox)
     launched = Launched(server, inbox, runner, Observer(plant.devices, bus))
+    launched.trends = control.trends
     launched.withdraw = serve(plant.door, control, control.console.handle)
     try:
         url = server.start()

@@ -13,6 +13,7 @@ peeks: nothing it reads has a side effect (a TES's memorized inputs stay).
 from __future__ import annotations
 
 from fieldtwin.control.resources import Control, fault_json, output_json
+from fieldtwin.control.trends import tags_panel
 from fieldtwin.devices.face import Device, Family, FrontPanel, Logged, Reading
 from fieldtwin.devices.module import ModuleDevice
 from fieldtwin.errors import FieldtwinError
@@ -49,6 +50,7 @@ def panels(control: Control) -> Json:
         "modules": modules,
         **families,
         "families": [{"key": key, "title": title} for key, title in titles.items()],
+        **tags_panel(plant),  # the tags, their values in their units, the default trends
     }
 
 

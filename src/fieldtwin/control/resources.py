@@ -18,6 +18,7 @@ from fieldtwin.clock import seconds as to_us
 from fieldtwin.console import Console
 from fieldtwin.console_syntax import module_address
 from fieldtwin.control.snapshot import Snapshot
+from fieldtwin.control.trends import Trends
 from fieldtwin.devices.face import (
     Device,
     DeviceStatus,
@@ -141,6 +142,8 @@ class Control:
         # every command through the plant's door (API, attached console, scenario) makes
         # it stale before its answer goes out: a later read sees the command's effect
         plant.door.watch(_Stale(self.snapshot))
+        # the series' rings, sampled on the runner's tick beside the observers (trends.py)
+        self.trends = Trends(plant)
 
     # --- the plant and its devices -----------------------------------------------
 

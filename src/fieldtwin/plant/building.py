@@ -28,6 +28,7 @@ from fieldtwin.plant.reading import (
     describe,
     plant_speed,
 )
+from fieldtwin.plant.tags import read_tags
 from fieldtwin.plant.value import Plant
 from fieldtwin.runtime.events import EventBus
 from fieldtwin.textfile import read_text
@@ -82,6 +83,7 @@ def build_plant(
         notes=list(ctx.notes),
         source=source,
     )
+    plant.tags = read_tags(source.data, source.name, plant)  # checked on the built plant
     if plc is not None:  # the watchdog's trip on the event stream (docs/control.md)
         plc.on_fault = partial(_publish_fault, plant.events)
     return plant

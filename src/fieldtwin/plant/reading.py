@@ -32,7 +32,7 @@ if TYPE_CHECKING:
 
 DEFAULT_PLANT = "default.toml"
 DEFAULT_NAME = "<default plant>"
-TOP_LEVEL = ("plant", "plc", "module", "tes", "run")
+TOP_LEVEL = ("plant", "plc", "module", "tes", "run", "tag", "dashboard")
 PROGRAM_KEYS = ("program", "constants", "text_blocks", "date", "watch")
 
 MAX_PLANT_BYTES = 4 * 1024 * 1024  # a plant file is read whole: bounded (DESIGN rule 14)

@@ -22,6 +22,7 @@ from fieldtwin.errors import ConfigError
 from fieldtwin.facade.tes import Tes, tes_core
 from fieldtwin.plant.ports import Ports
 from fieldtwin.plant.reading import PlantFile, recording_header
+from fieldtwin.plant.tags import Tags
 from fieldtwin.runtime.binder import Binding
 from fieldtwin.runtime.door import Door
 from fieldtwin.runtime.events import EventBus
@@ -45,6 +46,8 @@ class Plant:
     notes: list[str] = field(default_factory=list)  # what devices said of the file's inputs
     events: EventBus = field(default_factory=EventBus)  # what windows onto the plant observe
     source: PlantFile | None = None  # the file it was built from (a recording embeds it)
+    # what the plant file's [[tag]] tables name, and its default trends (fieldtwin.plant.tags)
+    tags: Tags = field(default_factory=Tags)
     ports: Ports = field(default_factory=Ports, repr=False, compare=False)
     # every command from outside runs at the door
     door: Door = field(default_factory=Door, repr=False, compare=False)

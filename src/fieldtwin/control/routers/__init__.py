@@ -17,8 +17,9 @@ from fieldtwin.control.routers import (
     objects,
     plant,
     plc,
+    tags,
 )
 
-GROUPS = (plant, clock, devices, faults, objects, plc, console, dashboard)
+GROUPS = (plant, clock, devices, faults, objects, plc, console, dashboard, tags)
 
 __all__ = ["GROUPS"]

@@ -427,6 +427,7 @@ function draw(state) {
       syncFaults(panel, d);
     }
   }
+  drawTags(state);
   trends.sample(state);
 }
 
@@ -543,6 +544,7 @@ class Ring {
 
 function catalogue(state) {
   const found = new Map();
+  tagSeries(state, found);
   for (const m of state.modules) {
     for (const w of m.iw) found.set(`${m.id}:${w.name}`, { label: `${w.name} (${m.kind})`, get: (s) => signed(s.modules.find((x) => x.id === m.id)?.iw.find((x) => x.name === w.name)?.value) });
     if (m.i_bits !== null) found.set(`${m.id}:I`, { label: `I${m.address} bits`, get: (s) => s.modules.find((x) => x.id === m.id)?.i_bits });
@@ -571,7 +573,8 @@ const trends = {
       const pick = document.getElementById("trend-pick");
       for (const [key, entry] of this.known) pick.append(el("option", { value: key }, entry.label));
     }
-    if (!this.series.length) return;
+    if (!this.opened) { this.opened = true; openDefaultTrends(this, state); }
+    if (!this.series.length || this.filling) return;
     this.times.push(state.clock.t_s);
     for (const s of this.series) {
       const v = s.get(state);
@@ -645,6 +648,82 @@ function wireTrends() {
   get("trend-out").addEventListener("click", () => trends.view((a, b, w) => [a - w / 2, b + w / 2]));
   get("trend-live").addEventListener("click", () => { trends.follow = true; trends.redraw(); });
   get("trend-csv").addEventListener("click", () => trends.csv());
+}
+
+// --- tags (docs/dashboard.md, "Tags"): labels and values in their units -----------------------------
+
+const TAG_DEVICE_OBJECT = /^(IW|OW|I|O)(\d{1,2}),/; // a module's object: IW5,3 O16,0 I14,0
+
+function tagSource(t) { return t.source || {}; }
+function tagDevice(t) { // the device id a tag belongs to ("5", "tes1"), or null for W, B...
+  const src = tagSource(t);
+  if (src.device) return src.device;
+  const m = TAG_DEVICE_OBJECT.exec(src.object || "");
+  return m ? m[2] : null;
+}
+function tagRowHtml(t) {
+  const value = t.value === null || t.value === undefined ? "-" : t.text;
+  return `<tr data-tag="${esc(t.name)}"><td><b>${esc(t.name)}</b></td><td class="tag-value" data-tag-value="${esc(t.name)}">${esc(value)}</td>
+    <td class="muted">${esc(t.source_text)}</td><td class="muted">${esc(t.description || "")}</td></tr>`;
+}
+function tagNotesHtml(list) { // beside a device's front: its tags, label = value in unit
+  if (!list.length) return "";
+  return `<div class="tag-notes">${list.map((t) => `<span class="tag-note" data-tag-note="${esc(t.name)}" title="${esc(t.source_text)}: ${esc(t.description || "")}">${esc(t.source_text.replace(/^\S+ (input|output|register) /, "$1 "))} <b>${esc(t.name)}</b> ${esc(t.value === null ? "-" : t.text)}</span>`).join(" · ")}</div>`;
+}
+const tagView = { section: null, body: null, html: "", notes: new Map() };
+function drawTags(state) {
+  const tags = (state.tags || []).filter((t) => !t.object);
+  if (!tags.length) return;
+  if (!tagView.section) {
+    tagView.body = el("tbody", {});
+    tagView.section = el("section", { id: "tags" }, el("h2", {}, "Tags"),
+      el("table", { class: "tags", id: "tag-table" }, el("thead", {}, el("tr", {}, el("th", {}, "tag"), el("th", {}, "value"), el("th", {}, "source"), el("th", {}, "description"))), tagView.body));
+    document.getElementById("rack").before(tagView.section);
+  }
+  const html = tags.map(tagRowHtml).join("");
+  if (html !== tagView.html) { tagView.body.innerHTML = html; tagView.html = html; }
+  const byDevice = new Map();
+  for (const t of tags) {
+    const id = tagDevice(t);
+    if (id !== null) byDevice.set(id, [...(byDevice.get(id) || []), t]);
+  }
+  for (const [key, panel] of panels) { // each front's own tags, under its display
+    const id = key.slice(key.indexOf(":") + 1);
+    const notes = tagNotesHtml(byDevice.get(id) || []);
+    let box = tagView.notes.get(key);
+    if (!box) { box = el("div", { class: "tag-box" }); panel.display.after(box); tagView.notes.set(key, box); }
+    if (box.dataset.html !== notes) { box.innerHTML = notes; box.dataset.html = notes; }
+  }
+}
+function tagSeries(state, found) { // every tag (and default trend object) as a trend series
+  for (const t of state.tags || []) {
+    const label = t.unit ? `${t.name} (${t.unit})` : t.name;
+    found.set(`tag:${t.name}`, { label, tag: t.name, get: (s) => { const v = (s.tags || []).find((x) => x.name === t.name)?.value; return typeof v === "boolean" ? Number(v) : v; } });
+  }
+}
+async function openDefaultTrends(view, state) {
+  // the plant file's default trends, with the history the plant kept before the page opened
+  const names = (state.trend_defaults || []).filter((n) => view.known && view.known.has(`tag:${n}`));
+  if (!names.length) return;
+  view.filling = true;
+  try {
+    const got = await Promise.all(names.map((n) => api("GET", `/trends/${encodeURIComponent(n)}`).catch(() => null)));
+    const base = got.find((g) => g && g.points.length)?.points.map((p) => p[0]) || [];
+    const cut = base.length ? base[base.length - 1] : -1;
+    for (const t of base) view.times.push(t);
+    for (let i = 0; i < names.length; i += 1) {
+      const key = `tag:${names[i]}`;
+      if (view.series.some((s) => s.key === key)) continue;
+      const entry = view.known.get(key);
+      const ring = new Ring(TREND_POINTS);
+      const at = new Map((got[i]?.points || []).filter((p) => p[0] <= cut).map((p) => [p[0], p[1]]));
+      for (const t of base) { const v = at.get(t); ring.push(v === undefined || v === null ? NaN : Number(v)); }
+      view.series.push({ key, label: entry.label, get: entry.get, ring });
+    }
+    view.rebuild();
+  } finally {
+    view.filling = false;
+  }
 }
 
 // --- traffic ---------------------------------------------------------------------------------------
