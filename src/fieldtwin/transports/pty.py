@@ -15,17 +15,29 @@ the package (a TCP-only plant, the console) runs where they do not exist (README
 
 Even parity and the "parked" pty (issue 23 item 2).  Linux's pty driver keeps no
 parity and no character size: every termios change on a pty clears PARENB and
-forces CS8 (drivers/tty/pty.c, ``pty_set_termios``).  glibc's ``tcsetattr(TCSANOW)``
-then reads the settings back and, when the call changed nothing at all while it
-asked for a parity (or a size) the result lacks, fails with EINVAL: pyserial's
-``termios.error: (22, 'Invalid argument')``.  So a master opening a pty with
-``parity='E'`` failed exactly when the pty already held what it asked for apart
-from the parity (the same speed: the twin's own line speed, written here, or what
-a previous master left), and worked when its open changed the speed.  The twin
-therefore keeps its pty *parked*: IXANY set in the input flags (harmless: the pty
-has no IXON flow control, and every serial library clears it), so the master's
-configuration always changes something and glibc never complains.  ``peer_line``
-reads what the master set and parks the pty again.
+forces CS8 (drivers/tty/pty.c, ``pty_set_termios``).  The C library of Debian 12
+(glibc 2.36 with a distribution patch, as Fedora's; seen in its machine code)
+wraps every ``tcsetattr`` in a ``TCGETS`` before and after: when none of the flag
+words (c_iflag, c_oflag, c_cflag with the speed, c_lflag) nor c_line changed while
+the call asked for a parity (or a size) the result lacks, it fails with EINVAL -
+pyserial's ``termios.error: (22, 'Invalid argument')``.  c_cc (VMIN, VTIME) does
+not count as a change.  So a master opening a pty with ``parity='E'`` failed
+exactly when the pty already held what it asked for apart from the parity (the
+same speed: the twin's own line speed, written here, or what a previous master
+left), and worked when its open changed the speed.  The twin therefore keeps its
+pty *parked*: IXANY set in the input flags (harmless: the pty has no IXON flow
+control, and every serial library clears it), so the master's configuration
+always changes something and glibc never complains.  ``peer_line`` reads what the
+master set and parks the pty again.
+
+What no twin can fix: a master that changes a setting of the port it has just
+opened with parity (pyserial's ``timeout`` or ``inter_byte_timeout`` setters,
+pymodbus's ``connect()``) makes a call that changes no flag word, and fails.  The
+twin cannot re-park the pty between the master's two calls (microseconds apart;
+nothing in a pty signals a termios change deterministically), and no termios
+setting makes the kernel change a flag word on each call: locked bits
+(TIOCSLCKTRMIOS) keep their old value.  docs/transports.md says how each master
+opens at 8E1.
 """
 
 from __future__ import annotations
