@@ -21,7 +21,6 @@ from typing import Any, Protocol
 from fieldtwin.charformat import CharFormat, Parity
 from fieldtwin.clock import SimClock
 from fieldtwin.errors import TransportError
-from fieldtwin.transports.pty import PeerLine, PtyTransport
 from fieldtwin.tsx.scm.line import Line
 
 MAX_CONNECTION_NAMES = 16  # the last TCP peers a channel remembers (DESIGN rule 14)
@@ -34,6 +33,14 @@ class CharTap(Protocol):
     def active(self) -> bool: ...
 
     def chars(self, direction: str, data: bytes, now: int | None = None) -> None: ...
+
+
+class MasterLine(Protocol):
+    """What a pty shows of its master's settings (fieldtwin.transports.pty.PeerLine)."""
+
+    def differs(self, own: CharFormat) -> bool: ...
+
+    def seen_as(self, own: CharFormat) -> CharFormat | None: ...
 
 
 class MemoryPeer:
@@ -100,7 +107,7 @@ class Port:
     settings_given: bool = False  # the URL fixed baud/parity/data/stop: never follow
     follow_error: str | None = None
     tap: CharTap | None = None  # the plant's event bus, when the binder gave one
-    master: PeerLine | None = None  # a pty: its master's settings, as last seen (issue 23)
+    master: MasterLine | None = None  # a pty: its master's settings, as last seen (issue 23)
 
     def follow(self, fmt: CharFormat) -> None:
         """Set a host serial port to the channel's configured format and speed (SCM 3.2).
@@ -152,10 +159,10 @@ class Port:
 
     def _sender(self) -> CharFormat | None:
         """The format a pty's master sends at, if it is not the channel's (None: the same)."""
-        peer = self.peer
-        if not isinstance(peer, PtyTransport):
+        peer_line = getattr(self.peer, "peer_line", None)  # a pty's (transports/pty.py)
+        if peer_line is None:
             return None
-        news = peer.peer_line()
+        news = peer_line()
         if news is not None:
             self.master = news
         own = self.line.fmt
