@@ -5,12 +5,17 @@ stream with the bytes; a point-to-point RS-232 line answers both requests."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
+from pathlib import Path
+
 from fieldtwin.clock import MS, SimClock
 from fieldtwin.modbus.crc import with_crc
 from fieldtwin.modbus.model import Counter, Link
 from fieldtwin.runtime.events import EventBus
 from fieldtwin.runtime.modbus_server import serve_rtu
 from fieldtwin.runtime.runner import Runner
+from fieldtwin.runtime.trace import TraceWriter
 from fieldtwin.transports.base import line_settings
 from fieldtwin.transports.memory import memory_pair
 from tests.modbus.modbus_fakes import TableDevice
@@ -20,7 +25,9 @@ READ_1 = with_crc(bytes([1, 0x03, 0x00, 0x00, 0x00, 0x01]))
 READ_2 = with_crc(bytes([2, 0x03, 0x00, 0x00, 0x00, 0x01]))
 
 
-def run(link: Link) -> tuple[bytes, TableDevice, TableDevice, list[dict[str, object]]]:
+def run(
+    link: Link, trace: Path | None = None
+) -> tuple[bytes, TableDevice, TableDevice, list[dict[str, object]]]:
     runner = Runner(SimClock(), speed=None)
     ours, master = memory_pair()
     one, two = TableDevice(1, delay_us=20 * MS), TableDevice(2)
@@ -28,6 +35,7 @@ def run(link: Link) -> tuple[bytes, TableDevice, TableDevice, list[dict[str, obj
     bus = EventBus()
     server.tap(bus, "pty")
     seen = bus.subscribe(("modbus",))
+    writer = TraceWriter(bus, trace) if trace is not None else None
     try:
         master.send(READ_1)
         runner.advance(5 * MS)  # slave 1 is in its 20 ms answer delay
@@ -36,6 +44,8 @@ def run(link: Link) -> tuple[bytes, TableDevice, TableDevice, list[dict[str, obj
         got = master.receive()
     finally:
         server.close()
+        if writer is not None:
+            writer.close()
     return got, one, two, [dict(e.data) for e in seen.take()]
 
 
@@ -54,3 +64,18 @@ def test_a_point_to_point_rs232_line_answers_both() -> None:
     assert got.count(bytes([1, 0x03, 0x02])) == 1 and got.count(bytes([2, 0x03, 0x02])) == 1
     assert one.counted(Counter.CRC_ERRORS, Link.RS232) == 0
     assert not [e for e in events if e.get("reason") == "collision"]
+
+
+def test_the_collision_is_in_trace_show(tmp_path: Path) -> None:
+    trace = tmp_path / "collision.jsonl"
+    run(Link.RS485, trace)
+    shown = subprocess.run(
+        [sys.executable, "-m", "fieldtwin", "trace", "show", str(trace)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=True,
+    ).stdout
+    spaced = " ".join(f"{b:02x}" for b in READ_2)
+    assert f"line fault crc_errors x1 (collision): {spaced}" in shown, shown
+    assert "the master sent while a reply was due; the reply is lost" in shown, shown

@@ -61,11 +61,15 @@ def read_umodbus(path: str) -> int:
 
 
 def read_pymodbus(path: str) -> int:
-    """pymodbus's serial clients set ``timeout`` or ``inter_byte_timeout`` on the open
-    port, which no Linux pty takes with parity E (``test_a_parity_only_change_fails``):
-    pymodbus opens the pty 8N1, which a pty cannot tell from 8E1 (docs/transports.md)."""
-    client = ModbusSerialClient(path, baudrate=38400, parity="N", timeout=2, retries=0)
+    """pymodbus's ``connect()`` opens the port and then sets ``inter_byte_timeout`` on
+    it, a change of VMIN only, which glibc refuses on a pty with parity E
+    (``test_pymodbus_own_open_at_8e1_fails_on_a_pty``).  The way that works: open the
+    port at 38400 8E1 with pyserial, every setting at once, and hand it to the client
+    as its ``socket``; ``connect()`` then keeps it (docs/transports.md)."""
+    client = ModbusSerialClient(path, baudrate=38400, parity="E", timeout=2, retries=0)
+    client.socket = serial.Serial(path, 38400, parity=serial.PARITY_EVEN, timeout=2.0)
     assert client.connect()
+    assert client.socket.parity == serial.PARITY_EVEN
     try:
         reply = client.read_holding_registers(WORD, count=1, device_id=1)
         assert not reply.isError(), reply
@@ -102,3 +106,16 @@ def test_a_parity_only_change_fails_on_any_linux_pty(running_plant: RunningPlant
             port.inter_byte_timeout = 0.0
     finally:
         port.close()
+
+
+def test_pymodbus_own_open_at_8e1_fails_on_a_pty(running_plant: RunningPlant) -> None:
+    """Why pymodbus needs its port handed over: its own ``connect()`` at parity E fails
+    on any Linux pty, with the same EINVAL (not the twin: the pty is parked, and the
+    open itself succeeds; it is the ``inter_byte_timeout`` set after it)."""
+    client = ModbusSerialClient(
+        running_plant.modbus(1).url, baudrate=38400, parity="E", timeout=1, retries=0
+    )
+    try:
+        assert not client.connect()  # pymodbus logs the termios.error and gives up
+    finally:
+        client.close()  # type: ignore[no-untyped-call]

@@ -64,6 +64,10 @@ INPUT_FORMS: dict[str, Callable[[Sequence[object]], str]] = {
     "line": lambda f: f"console {str(f[0])!r}",
     "call": _call,
     "ret": lambda f: "(the command returned)",
+    "settings": lambda f: (
+        f"settings {f[0]}  master {f[1] or '(unnamed rate)'} Bd, {f[2]} stop bit(s)"
+        + (", odd parity" if f[3] else "")
+    ),
 }
 
 

@@ -51,6 +51,7 @@ MAX_FILE_CHARS = 4 * MiB  # one embedded file (bytes, as latin-1 text): a plant 
 MAX_PLANT_CHARS = 4 * MiB  # the plant file's text
 MAX_NAME = 4096  # a file name the plant gives, a plant name
 MAX_SPEED = 1e6
+MAX_BAUD = 4_000_000  # the fastest rate termios names
 SAMPLE_MS_RANGE = (10, 3_600_000)
 
 FORMAT = "fieldtwin-recording"
@@ -66,7 +67,7 @@ CONSOLES = ("inline", "modes")
 PLANT_FIELDS = ("name", "text", "files")
 
 Record = list[Any]
-INPUT_KINDS = frozenset({"bind", "accept", "data", "close", "call", "line", "ret"})
+INPUT_KINDS = frozenset({"bind", "accept", "data", "close", "call", "line", "ret", "settings"})
 OUTPUT_KINDS = frozenset({"send", "result", "object", "led", "chars", "dem"})
 
 JSON_MARKS = re.compile(rb'"(?:[^"\\]|\\.)*"|[\[\]{}]')
@@ -124,6 +125,14 @@ def _bool(value: object) -> bool:
     return isinstance(value, bool)
 
 
+def _baud(value: object) -> bool:  # null: a rate termios has no constant for
+    return value is None or (is_int(value) and 0 < value <= MAX_BAUD)  # type: ignore[operator]
+
+
+def _stop_bits(value: object) -> bool:
+    return value in (1, 2) and is_int(value)
+
+
 Field = tuple[str, str, Callable[[object], bool]]  # name, what it must be, check
 
 _NAME: Field = ("name", "a string of at most 64 characters", _text(64))
@@ -143,6 +152,16 @@ RECORD_FORMS: dict[str, tuple[bool, tuple[Field, ...]]] = {
     ),
     "line": (True, (("line", "a console line (a string)", _text()),)),
     "ret": (True, ()),
+    # the master's line settings on a pty changed (issue 23; older recordings have none)
+    "settings": (
+        True,
+        (
+            _TRANSPORT,
+            ("baud", "a baud rate (1 to 4000000) or null", _baud),
+            ("stop_bits", "1 or 2", _stop_bits),
+            ("odd", "true or false (odd parity)", _bool),
+        ),
+    ),
     "end": (True, ()),
     "send": (False, (_TRANSPORT, _BYTES)),
     "result": (False, (("command", "a command name", _text(64)), ("answer", "JSON", _anything))),

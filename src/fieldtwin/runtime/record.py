@@ -16,6 +16,8 @@ before them, so that a replay delivers them between the very same two events)::
     ["call",   t, fired, "set_input", [...]]  a control-API command (a door Command)
     ["line",   t, fired, "advance 5"]         a console command line (a door Command)
     ["ret",    t, fired]                      the command before returned here
+    ["settings", t, fired, "t3", 9600, 1, false]  the master on pty t3 set its line:
+                                              baud (null: unnamed), stop bits, odd parity
 
 outputs (the simulated instant only; a replay must produce them identically)::
 
@@ -67,6 +69,7 @@ from fieldtwin.runtime.recwriter import (
 )
 from fieldtwin.runtime.runner import CloseCallback, ConnectCallback, DataCallback, Runner
 from fieldtwin.transports.base import Listener, SendObservable, Transport
+from fieldtwin.transports.pty import PeerLine, PtyTransport
 
 SAMPLE_MS = 100  # objects and LEDs are looked at this often (simulated ms)
 SAMPLE_PRIORITY = 1 << 30  # after every plant event of the same instant
@@ -201,6 +204,7 @@ class Recorder:
         self._chars = CharsFeed(bus, self.writer.add)
         self._sampler = Sampler(clock, devices, self.writer.add, header.sample_ms * MS)
         self._observed: list[SendObservable] = []  # transports whose sends it sees
+        self._lines: list[PtyTransport] = []  # ptys whose master's settings it sees
         self._unwatch: Callable[[], None] | None = None
         if runner is not None:
             runner.set_tap(self)
@@ -224,6 +228,10 @@ class Recorder:
             transport.observe_sends(self._sending(key))
             self._observed.append(transport)
 
+        if isinstance(transport, PtyTransport):  # the master's line settings: inputs too
+            transport.observe_line(self._line_set(key))
+            self._lines.append(transport)
+
         def arrived(data: bytes, now: int) -> None:
             self._input("data", key, bytes(data))  # hex: the writer's thread
             on_data(data, now)
@@ -234,6 +242,12 @@ class Recorder:
                 on_close(now)
 
         return arrived, closed
+
+    def _line_set(self, key: str) -> Callable[[PeerLine], None]:
+        def line_set(line: PeerLine) -> None:
+            self._input("settings", key, line.baud, line.stop_bits, line.odd)
+
+        return line_set
 
     def _sending(self, key: str) -> Callable[[bytes], None]:
         def sent(data: bytes) -> None:
@@ -289,6 +303,9 @@ class Recorder:
         for transport in self._observed:
             transport.observe_sends(None)
         self._observed.clear()
+        for pty in self._lines:
+            pty.observe_line(None)
+        self._lines.clear()
         self._chars.close()
         self._sampler.close()
         self.writer.add(["end", self.clock.now, self.clock.fired])

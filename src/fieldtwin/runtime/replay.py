@@ -29,6 +29,7 @@ from fieldtwin.runtime.record import Keys, Record
 from fieldtwin.runtime.runner import CloseCallback, ConnectCallback, DataCallback, Runner
 from fieldtwin.runtime.wall import WallClock
 from fieldtwin.transports.base import Listener, SendObservable, Transport
+from fieldtwin.transports.pty import PeerLine, PtyTransport
 from fieldtwin.transports.virtual import VirtualListener
 
 
@@ -270,6 +271,12 @@ class ReplayRunner(Runner):
             self.detach(handler[0])
             if handler[2] is not None:
                 handler[2](now)
+        elif kind == "settings":  # the master set its line: the pty shows it from now on
+            handler = self._handlers.get(record[3])
+            if handler is None or not isinstance(handler[0], PtyTransport):
+                self._lost(record, "the replayed plant has no such pty")
+                return
+            handler[0].note_line(PeerLine(record[4], record[5], record[6]))
         elif self.dispatch is not None:
             self.dispatch(record)
 

@@ -15,23 +15,39 @@ the package (a TCP-only plant, the console) runs where they do not exist (README
 
 Even parity and the "parked" pty (issue 23 item 2).  Linux's pty driver keeps no
 parity and no character size: every termios change on a pty clears PARENB and
-forces CS8 (drivers/tty/pty.c, ``pty_set_termios``).  glibc's ``tcsetattr(TCSANOW)``
-then reads the settings back and, when the call changed nothing at all while it
-asked for a parity (or a size) the result lacks, fails with EINVAL: pyserial's
-``termios.error: (22, 'Invalid argument')``.  So a master opening a pty with
-``parity='E'`` failed exactly when the pty already held what it asked for apart
-from the parity (the same speed: the twin's own line speed, written here, or what
-a previous master left), and worked when its open changed the speed.  The twin
-therefore keeps its pty *parked*: IXANY set in the input flags (harmless: the pty
-has no IXON flow control, and every serial library clears it), so the master's
-configuration always changes something and glibc never complains.  ``peer_line``
-reads what the master set and parks the pty again.
+forces CS8 (drivers/tty/pty.c, ``pty_set_termios``).  The C library of Debian 12
+(glibc 2.36 with a distribution patch, as Fedora's; seen in its machine code)
+wraps every ``tcsetattr`` in a ``TCGETS`` before and after: when none of the flag
+words (c_iflag, c_oflag, c_cflag with the speed, c_lflag) nor c_line changed while
+the call asked for a parity (or a size) the result lacks, it fails with EINVAL -
+pyserial's ``termios.error: (22, 'Invalid argument')``.  c_cc (VMIN, VTIME) does
+not count as a change.  So a master opening a pty with ``parity='E'`` failed
+exactly when the pty already held what it asked for apart from the parity (the
+same speed: the twin's own line speed, written here, or what a previous master
+left), and worked when its open changed the speed.  The twin therefore keeps its
+pty *parked*: IXANY set in the input flags (harmless: the pty has no IXON flow
+control, and every serial library clears it), so the master's configuration
+always changes something and glibc never complains.  ``peer_line`` reads what the
+master set and parks the pty again; it is looked at each time bytes arrive
+(``receive``), and a change is told to the line's observer (a recording keeps it
+as an input, so that a replay reproduces a mismatch).
+
+What no twin can fix: a master that changes a setting of the port it has just
+opened with parity (pyserial's ``timeout`` or ``inter_byte_timeout`` setters,
+pymodbus's ``connect()``) makes a call that changes no flag word, and fails.  The
+twin cannot re-park the pty between the master's two calls (microseconds apart;
+nothing in a pty signals a termios change deterministically), and no termios
+setting makes the kernel change a flag word on each call: locked bits
+(TIOCSLCKTRMIOS) keep their old value.  docs/transports.md says how each master
+opens at 8E1.
 """
 
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cache
 
 from fieldtwin.charformat import CharFormat, Parity
 from fieldtwin.transports.base import READ_CHUNK, FdTransport, LineSettings, line_settings
@@ -67,6 +83,10 @@ class PeerLine:
         return self.baud != own.baud or self.odd != (own.parity is Parity.ODD)
 
 
+LineObserver = Callable[["PeerLine"], None]
+
+
+@cache
 def _speeds() -> dict[int, int]:
     import termios
 
@@ -126,17 +146,42 @@ class PtyTransport(FdTransport):
     def _write(self, data: bytes) -> int:
         return os.write(self._master, data)
 
+    # --- the master's line settings (runtime/uart.py reads them, a recording keeps them)
+
+    _line_news: PeerLine | None = None  # class defaults: a replay's pty skips __init__
+    _line_observer: LineObserver | None = None
+
+    def observe_line(self, observer: LineObserver | None) -> None:
+        """Call ``observer`` with every change of the master's settings (a recording's
+        ``settings`` input), when it is seen: before the bytes that follow it."""
+        self._line_observer = observer
+
+    def note_line(self, line: PeerLine) -> None:
+        """The master set ``line``: read from the pty, or a replay's recorded input."""
+        self._line_news = line
+        if self._line_observer is not None:
+            self._line_observer(line)
+
     def peer_line(self) -> PeerLine | None:
-        """The settings the master set since the last call (then parked again); None: none."""
+        """The settings the master set since the last call; None: no change.
+
+        The pty is looked at when bytes arrive (``receive``), never here: so every
+        change a device acts on was seen, in order, by whoever observes the line.
+        """
+        news, self._line_news = self._line_news, None
+        return news
+
+    def _look_at_line(self) -> None:
+        """Read the master's settings if it changed them, and park the pty again."""
         slave = getattr(self, "_slave", None)  # a replay's pty has none: nothing to see
-        if self.closed or slave is None:
-            return None
+        if slave is None:
+            return
         import termios
 
         try:
             attrs = termios.tcgetattr(slave)
             if attrs[0] & termios.IXANY:
-                return None  # still parked: the master changed nothing
+                return  # still parked: the master changed nothing
             cflag = attrs[2]
             line = PeerLine(
                 baud=_speeds().get(attrs[5]),
@@ -145,13 +190,14 @@ class PtyTransport(FdTransport):
             )
             _park(slave)
         except termios.error:
-            return None  # the pty is going away: its close is reported elsewhere
-        return line
+            return  # the pty is going away: its close is reported elsewhere
+        self.note_line(line)
 
     def receive(self) -> bytes:
         """What the peer has written since the last call; b"" if nothing."""
         self._check_open("receive")
         self.flush()
+        self._look_at_line()  # the settings it wrote them with come first
         try:
             return os.read(self._master, READ_CHUNK)
         except BlockingIOError:

@@ -4,6 +4,11 @@ The in-memory peer lives in simulated time (its characters arrive at its own
 format and speed, so a peer with another format yields parity and format
 errors).  The real endpoints come from ``fieldtwin.transports`` and are pumped
 by the PLC's pacer (fieldtwin.facade.host opens them), which then paces time.
+
+A pty shows its master's line settings (issue 23, fieldtwin.transports.pty.PeerLine):
+when its speed or odd parity differ from the channel's, the characters are received
+as the module's UART would sample them, as from a memory peer at that format - the
+parity and format faults of SCM 6.3.
 """
 
 from __future__ import annotations
@@ -28,6 +33,14 @@ class CharTap(Protocol):
     def active(self) -> bool: ...
 
     def chars(self, direction: str, data: bytes, now: int | None = None) -> None: ...
+
+
+class MasterLine(Protocol):
+    """What a pty shows of its master's settings (fieldtwin.transports.pty.PeerLine)."""
+
+    def differs(self, own: CharFormat) -> bool: ...
+
+    def seen_as(self, own: CharFormat) -> CharFormat | None: ...
 
 
 class MemoryPeer:
@@ -94,6 +107,7 @@ class Port:
     settings_given: bool = False  # the URL fixed baud/parity/data/stop: never follow
     follow_error: str | None = None
     tap: CharTap | None = None  # the plant's event bus, when the binder gave one
+    master: MasterLine | None = None  # a pty: its master's settings, as last seen (issue 23)
 
     def follow(self, fmt: CharFormat) -> None:
         """Set a host serial port to the channel's configured format and speed (SCM 3.2).
@@ -141,7 +155,20 @@ class Port:
     def feed(self, data: bytes, now: int) -> None:
         if self.tap is not None and self.tap.active:
             self.tap.chars("in", data, now)
-        self.line.feed(data, now)
+        self.line.feed(data, now, self._sender())
+
+    def _sender(self) -> CharFormat | None:
+        """The format a pty's master sends at, if it is not the channel's (None: the same)."""
+        peer_line = getattr(self.peer, "peer_line", None)  # a pty's (transports/pty.py)
+        if peer_line is None:
+            return None
+        news = peer_line()
+        if news is not None:
+            self.master = news
+        own = self.line.fmt
+        if self.master is None or not self.master.differs(own):
+            return None
+        return self.master.seen_as(own)  # None: a rate termios cannot name (the channel's)
 
     def close(self) -> None:
         for item in (self.peer, self.listener):
