@@ -9,16 +9,20 @@ never slows the plant nor grows its memory (DESIGN rule 14).  ``bus.active`` tel
 publisher whether anybody listens, so that an unobserved plant pays nothing.
 
 Off the hot path: once ``start()`` was called (``fieldtwin run``), what the simulation's
-thread hands the bus is only appended, as a compact raw record (a callable and its
-arguments: the bytes of a frame, the time, the small tuple of a device's state), to
-one bounded buffer (``FEED`` records).  The observers' thread takes the whole buffer
-every ``BATCH_S`` and does the work there, in order: framing and decoding the frames
-(``fieldtwin.runtime.wiretap``), building the events, filling the subscriptions, then
-waking each subscriber once per batch (a trace or pcap writer writes its file then,
-the event stream sends its batch).  Were the buffer ever full (the observers' thread
-starved), a record is lost and counted as dropped for every subscriber.  Without
-``start()`` (tests, the console) a record is handled at once on the caller's thread,
-as before.
+thread hands the bus is only appended, as a compact raw record of plain data (an
+opcode, a stream's number, the bytes of a frame, the time, the small tuple of a
+device's state: ``OP_*``), to one bounded buffer (``FEED`` records).  The observers'
+thread takes the whole buffer every ``BATCH_S``.  With a process of the observers'
+own (``start(process=True)``, fieldtwin.runtime.obslink) it ships the batch there,
+where the frames are framed and decoded, the events built and encoded, the trace and
+pcap files written, and each ``/events`` subscriber's filter run
+(``subscribe(remote=True)``: its events come back as JSON text).  Subscribers in this
+process (the console's ``trace``; everything when the process could not start) are
+served on the observers' thread itself, in order, as before: framing and decoding
+(``fieldtwin.runtime.wiretap``), the events, the subscriptions, each subscriber woken
+once per chunk.  Were the buffer ever full, a record is lost and counted as dropped
+for every subscriber.  Without ``start()`` (tests, the console) a record is handled
+at once on the caller's thread, as before.
 
 ``listen(kinds, callback)`` is the one exception: the callback runs on the simulation's
 thread at the instant of publication (a recording's SCM and DEM records, which must
@@ -28,6 +32,7 @@ writer's queue, fieldtwin.runtime.record).
 
 from __future__ import annotations
 
+import itertools
 import json
 import sys
 import threading
@@ -35,7 +40,7 @@ import time
 from collections import deque
 from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 DEFAULT_QUEUE = 10_000  # events a subscriber may have unread before the oldest are dropped
 MAX_SUBSCRIBERS = 64  # subscriptions one bus accepts at once
@@ -45,11 +50,56 @@ CHUNK = 64  # records handled between two yields of the observers' thread
 YIELD_S = 0.0001  # a yield: long enough for the simulation's thread to take the interpreter
 SWITCH_S = 0.0005  # the interpreter's switch interval once started (Python's default: 5 ms)
 STOP_WAIT_S = 10.0  # close() waits this long for the observers' thread
+MAX_STREAMS = 4096  # wiretap streams remembered by number (the oldest forgotten)
+
+# A raw record is plain data: ``(op, *args)``.  The data records (the hot path):
+OP_EVENT = 0  # (OP_EVENT, t_us, kind, device, data): an event as published
+OP_IN = 1  # (OP_IN, stream, bytes, now, states): a chunk arrived (wiretap.Stream)
+OP_POLL = 2  # (OP_POLL, stream, now, states): the core was polled
+OP_OUT = 3  # (OP_OUT, stream, bytes, now): a transmission
+OP_REJECTED = 4  # (OP_REJECTED, stream, bytes, now, reason, note, fault)
+# ... and the control records, never refused by a full buffer:
+OP_FORGET = 5  # (OP_FORGET, stream): its connection closed
+OP_TAP = 6  # (OP_TAP, tap, spec): a wiretap, as the observers' process rebuilds it
+OP_STREAM = 7  # (OP_STREAM, stream, tap, conn)
+OP_SUB = 8  # (OP_SUB, number, kinds, devices, maxlen): a subscription in the process
+OP_UNSUB = 9  # (OP_UNSUB, number)
+OP_WRITE = 10  # (OP_WRITE, "trace" | "pcap", path, start_wall): a file the process writes
+STREAM_OPS = {OP_IN: "inbound", OP_POLL: "poll", OP_OUT: "outbound", OP_REJECTED: "rejected"}
 
 # as Starlette's send_json: compact, not ASCII-escaped (one encoder, made once)
 _ENCODE = json.JSONEncoder(separators=(",", ":"), ensure_ascii=False).encode
 
 Listener = Callable[[int, str, str, Mapping[str, object]], None]
+
+
+class Tapped(Protocol):
+    """A wiretap's stream as the bus knows it (fieldtwin.runtime.wiretap.Stream)."""
+
+    conn: str
+
+    @property
+    def tap(self) -> Any: ...
+
+
+class Link(Protocol):
+    """The observers' process as the bus drives it (fieldtwin.runtime.obslink)."""
+
+    alive: bool
+
+    def ship(self, batch: list[tuple[Any, ...]], lost: int) -> None: ...
+
+    def subscribe(
+        self,
+        kinds: Collection[str] | None,
+        devices: Collection[str] | None,
+        maxlen: int,
+        notify: Callable[[], None] | None,
+    ) -> Any: ...
+
+    def write(self, kind: str, path: str, start_wall: float | None = None) -> None: ...
+
+    def close(self) -> None: ...
 
 
 @dataclass(frozen=True, slots=True)
@@ -127,6 +177,10 @@ class Subscription:
             count = min(limit, len(self._queue))
             return [self._queue.popleft() for _ in range(count)]
 
+    def texts(self, limit: int = 1000) -> list[str]:
+        """``take(limit)`` as each event's JSON text (what ``/events`` sends)."""
+        return [event.json() for event in self.take(limit)]
+
     def __len__(self) -> int:
         return len(self._queue)
 
@@ -152,25 +206,36 @@ class EventBus:
         self._thread: threading.Thread | None = None
         self._closing = False
         self.errors = 0  # records whose handling raised (a bug: said once on stderr)
+        self._ids = itertools.count(1)  # numbers of wiretaps, streams, subscriptions
+        self._streams: dict[int, Any] = {}  # number -> wiretap.Stream (OP_IN ... OP_REJECTED)
+        self._link: Link | None = None  # the observers' process, when it runs
+        self._taps: set[int] = set()  # wiretaps the process was told of
+        self.remote = 0  # subscriptions and file writers the process holds
 
     @property
     def active(self) -> bool:
         """True while somebody listens: publishers may skip building events otherwise."""
-        return bool(self._subs) or bool(self._listeners)
+        return bool(self._subs) or bool(self._listeners) or self.remote > 0
 
     @property
     def watched(self) -> bool:
         """True while a subscription exists (a wiretap's frames go only to those)."""
-        return bool(self._subs)
+        return bool(self._subs) or self.remote > 0
+
+    @property
+    def link(self) -> Link | None:
+        """The observers' process, while it runs."""
+        link = self._link
+        return link if link is not None and link.alive else None
 
     # --- the simulation's side ---------------------------------------------------------
 
     def post(self, record: tuple[Any, ...]) -> None:
-        """Hand the observers one raw record: ``(handler, *args)``; the handler runs on the
+        """Hand the observers one raw record (``OP_*``, plain data), handled on the
         observers' side (at once when the bus was not started)."""
         feed = self._feed
         if feed is None:
-            record[0](*record[1:])
+            self.handle(record)
             return
         if len(feed) >= self.feed_size:
             self._lost += 1
@@ -179,12 +244,41 @@ class EventBus:
         if len(feed) == 1:
             self._wake.set()
 
+    def control(self, record: tuple[Any, ...]) -> None:
+        """A control record: in order with the data, never refused."""
+        feed = self._feed
+        if feed is None:
+            self.handle(record)
+        else:
+            feed.append(record)
+            self._wake.set()
+
     def publish(self, t_us: int, kind: str, device: str, data: Mapping[str, object]) -> None:
         for kinds, callback in self._listeners:
             if kind in kinds:
                 callback(t_us, kind, device, data)
-        if self._subs:
-            self.post((self.deliver, t_us, kind, device, data))
+        if self._subs or self.remote:
+            self.post((OP_EVENT, t_us, kind, device, data))
+
+    def attach(self, stream: Tapped, number: int | None = None) -> int:
+        """Number ``stream`` (a wiretap's) for the records that name it; the observers'
+        process is told of it (and of its wiretap, the first time)."""
+        if number is None:
+            number = next(self._ids)
+        streams = self._streams
+        if len(streams) >= MAX_STREAMS:
+            streams.pop(next(iter(streams)))
+        streams[number] = stream
+        if self._link is not None and self._feed is not None:
+            tap = stream.tap
+            if tap.tid not in self._taps:
+                self._taps.add(tap.tid)
+                self.control((OP_TAP, tap.tid, tap.spec()))
+            self.control((OP_STREAM, number, tap.tid, stream.conn))
+        return number
+
+    def new_id(self) -> int:
+        return next(self._ids)
 
     def listen(self, kinds: Collection[str], callback: Listener) -> Callable[[], None]:
         """Call ``callback(t_us, kind, device, data)`` on the publishing (simulation's)
@@ -200,6 +294,18 @@ class EventBus:
         return stop
 
     # --- the observers' side -----------------------------------------------------------
+
+    def handle(self, record: tuple[Any, ...]) -> None:
+        """One raw record, in this process."""
+        op = record[0]
+        if op == OP_EVENT:
+            self.deliver(*record[1:])
+        elif op in STREAM_OPS:
+            stream = self._streams.get(record[1])
+            if stream is not None:
+                getattr(stream, STREAM_OPS[op])(*record[2:])
+        elif op == OP_FORGET:
+            self._streams.pop(record[1], None)
 
     def deliver(self, t_us: int, kind: str, device: str, data: Mapping[str, object]) -> None:
         """One event to every subscription that wants it (the observers' side)."""
@@ -222,22 +328,35 @@ class EventBus:
         handled = 0
         with self._round:
             while feed:
-                count = min(CHUNK, len(feed))
-                for _ in range(count):
-                    record = feed.popleft()
-                    try:
-                        record[0](*record[1:])
-                    except Exception as exc:  # a decoder's bug: told, the plant runs on
-                        self._failed(exc)
-                handled += count
-                self._wake_subscribers()  # a file writer drains its queue chunk by chunk
-                if feed:
-                    time.sleep(YIELD_S)  # the simulation's thread may want the interpreter
+                batch = [feed.popleft() for _ in range(len(feed))]
+                lost, self._lost = self._lost, 0
+                link = self._link
+                if link is not None:
+                    link.ship(batch, lost)  # the observers' process does the work
+                if self._subs:
+                    self._here(batch, lost)
+                else:  # nobody here: only what the stream table needs
+                    for record in batch:
+                        if record[0] == OP_FORGET:
+                            self._streams.pop(record[1], None)
+                handled += len(batch)
             self._wake_subscribers()
         return handled
 
-    def _wake_subscribers(self) -> None:
-        lost, self._lost = self._lost, 0
+    def _here(self, batch: list[tuple[Any, ...]], lost: int) -> None:
+        """The work of ``batch`` on this thread, for the subscribers in this process."""
+        self._wake_subscribers(lost)
+        for start in range(0, len(batch), CHUNK):
+            if start:
+                time.sleep(YIELD_S)  # the simulation's thread may want the interpreter
+            for record in batch[start : start + CHUNK]:
+                try:
+                    self.handle(record)
+                except Exception as exc:  # a decoder's bug: told, the plant runs on
+                    self._failed(exc)
+            self._wake_subscribers()  # a file writer drains its queue chunk by chunk
+
+    def _wake_subscribers(self, lost: int = 0) -> None:
         for sub in self._subs:
             if lost:
                 sub._lost(lost)
@@ -248,11 +367,16 @@ class EventBus:
         if self.errors == 1:
             print(f"fieldtwin: an observer failed ({exc!r}); said once", file=sys.stderr)
 
-    def start(self) -> None:
+    def start(self, process: bool = False) -> None:
         """From now on the simulation's thread only appends records; a thread of the
-        observers' does the work (idempotent)."""
+        observers' does the work, or (``process``) ships it to a process of the
+        observers' own, fieldtwin.runtime.obslink (idempotent)."""
         if self._thread is not None:
             return
+        if process:
+            from fieldtwin.runtime.obslink import ObserversProcess
+
+            self._link = ObserversProcess.start(self)
         # a thread waiting for the interpreter (the simulation's, back from a socket call)
         # gets it after this long at most, not after Python's 5 ms (the web server's
         # thread runs Python too): the observers' work never holds the plant long
@@ -282,6 +406,9 @@ class EventBus:
             thread.join(STOP_WAIT_S)
         self.process()
         self._feed = None  # what is published from now on is handled at once
+        link, self._link = self._link, None
+        if link is not None:
+            link.close()  # the process writes what it holds, closes its files, ends
 
     # --- subscriptions -----------------------------------------------------------------
 
@@ -292,15 +419,21 @@ class EventBus:
         *,
         maxlen: int = DEFAULT_QUEUE,
         notify: Callable[[], None] | None = None,
-    ) -> Subscription:
+        remote: bool = False,
+    ) -> Any:
         """A new subscription; ``notify`` is called when events came: on each event when
-        the bus was not started, else once per batch from the observers' thread."""
+        the bus was not started, else once per batch from the observers' thread.
+        ``remote``: filtered and encoded in the observers' process when it runs (its
+        ``texts()`` are what it sent; fieldtwin.runtime.obslink), here otherwise."""
         if maxlen < 1:
             raise ValueError("a subscription holds at least one event")
-        sub = Subscription(self, kinds, devices, maxlen, notify)
         with self._lock:
-            if len(self._subs) >= self.max_subscribers:
+            if len(self._subs) + self.remote >= self.max_subscribers:
                 raise OverflowError(f"at most {self.max_subscribers} subscribers at once")
+            link = self.link if remote else None
+            if link is not None:
+                return link.subscribe(kinds, devices, maxlen, notify)
+            sub = Subscription(self, kinds, devices, maxlen, notify)
             self._subs = (*self._subs, sub)
         return sub
 
@@ -314,6 +447,7 @@ __all__ = [
     "DEFAULT_QUEUE",
     "FEED",
     "MAX_SUBSCRIBERS",
+    "OP_EVENT",
     "Event",
     "EventBus",
     "Subscription",
