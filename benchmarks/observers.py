@@ -20,7 +20,8 @@ request (utime + stime from /proc of the server and its observers' process, over
 load and the drain after it: what the work costs, which the load on the machine
 disturbs less than throughput); and what the observers got: for subscribers, the
 ``modbus`` events received and those reported dropped against the two frames
-(request, reply) of every request sent; for the files, the trace lines, pcap data packets and recorded ``data`` inputs once the servers stopped.
+(request, reply) of every request sent; for the files, the trace lines, pcap data
+packets and recorded ``data`` inputs once the servers stopped.
 
 Subscribers run in a process of their own (``--subscribe``, asyncio + websockets),
 so they never share the server's GIL.  Everything started is stopped by its process id.
