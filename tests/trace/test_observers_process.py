@@ -24,7 +24,7 @@ import dpkt
 import pytest
 
 pytest.importorskip("websockets")
-from websockets.sync.client import connect  # noqa: E402
+from websockets.sync.client import connect
 
 ROOT = Path(__file__).resolve().parents[2]
 PLANT = '[[tes]]\nmodel = "TES 32EST"\nslave = 1\nendpoint = "tcp://127.0.0.1:0"\n'
