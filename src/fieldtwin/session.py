@@ -179,7 +179,9 @@ class Session:
     def start_events(self, process: bool = False) -> None:
         """The observers' work on a thread of theirs, or in a process of their own
         (``process``; DESIGN rule 13, fieldtwin.runtime.obslink)."""
-        self.plant.events.start(process=process)
+        from fieldtwin.runtime.obslink import ObserversProcess
+
+        self.plant.events.start(ObserversProcess.start if process else None)
         self.push(self.plant.events.close)  # what the observers hold reaches the files
 
     def start_control(self, options: ControlOptions) -> Launched:

@@ -8,21 +8,16 @@ subscriber does not keep up, its oldest events are dropped and counted, so an ob
 never slows the plant nor grows its memory (DESIGN rule 14).  ``bus.active`` tells a
 publisher whether anybody listens, so that an unobserved plant pays nothing.
 
-Off the hot path: once ``start()`` was called (``fieldtwin run``), what the simulation's
-thread hands the bus is only appended, as a compact raw record of plain data (an
-opcode, a stream's number, the bytes of a frame, the time, the small tuple of a
-device's state: ``OP_*``), to one bounded buffer (``FEED`` records).  The observers'
-thread takes the whole buffer every ``BATCH_S``.  With a process of the observers'
-own (``start(process=True)``, fieldtwin.runtime.obslink) it ships the batch there,
-where the frames are framed and decoded, the events built and encoded, the trace and
-pcap files written, and each ``/events`` subscriber's filter run
-(``subscribe(remote=True)``: its events come back as JSON text).  Subscribers in this
-process (the console's ``trace``; everything when the process could not start) are
-served on the observers' thread itself, in order, as before: framing and decoding
-(``fieldtwin.runtime.wiretap``), the events, the subscriptions, each subscriber woken
-once per chunk.  Were the buffer ever full, a record is lost and counted as dropped
-for every subscriber.  Without ``start()`` (tests, the console) a record is handled
-at once on the caller's thread, as before.
+Off the hot path: once ``start()`` was called (``fieldtwin run``), the simulation's
+thread only appends a raw record of plain data (``OP_*`` of fieldtwin.runtime.obsrecords:
+the bytes of a frame, the time, the small tuple of a device's state) to one bounded
+buffer (``FEED`` records; when full, a record is lost and counted as dropped for every
+subscriber).  The observers' thread takes the buffer every ``BATCH_S`` and ships it to
+the observers' own process (``start(ObserversProcess.start)``, runtime.obslink), which
+frames, decodes, writes the trace and pcap and filters each ``/events`` subscriber
+(``subscribe(remote=True)``); subscribers in this process (the console's ``trace``;
+all when that process could not start) are served on the observers' thread, in order.
+Without ``start()`` (tests, the console) a record is handled at once, as before.
 
 ``listen(kinds, callback)`` is the one exception: the callback runs on the simulation's
 thread at the instant of publication (a recording's SCM and DEM records, which must
@@ -40,7 +35,18 @@ import time
 from collections import deque
 from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Any
+
+from fieldtwin.runtime.obsrecords import (
+    MAX_STREAMS,
+    OP_EVENT,
+    OP_FORGET,
+    OP_STREAM,
+    OP_TAP,
+    STREAM_OPS,
+    Link,
+    Tapped,
+)
 
 DEFAULT_QUEUE = 10_000  # events a subscriber may have unread before the oldest are dropped
 MAX_SUBSCRIBERS = 64  # subscriptions one bus accepts at once
@@ -50,56 +56,10 @@ CHUNK = 64  # records handled between two yields of the observers' thread
 YIELD_S = 0.0001  # a yield: long enough for the simulation's thread to take the interpreter
 SWITCH_S = 0.0005  # the interpreter's switch interval once started (Python's default: 5 ms)
 STOP_WAIT_S = 10.0  # close() waits this long for the observers' thread
-MAX_STREAMS = 4096  # wiretap streams remembered by number (the oldest forgotten)
-
-# A raw record is plain data: ``(op, *args)``.  The data records (the hot path):
-OP_EVENT = 0  # (OP_EVENT, t_us, kind, device, data): an event as published
-OP_IN = 1  # (OP_IN, stream, bytes, now, states): a chunk arrived (wiretap.Stream)
-OP_POLL = 2  # (OP_POLL, stream, now, states): the core was polled
-OP_OUT = 3  # (OP_OUT, stream, bytes, now): a transmission
-OP_REJECTED = 4  # (OP_REJECTED, stream, bytes, now, reason, note, fault)
-# ... and the control records, never refused by a full buffer:
-OP_FORGET = 5  # (OP_FORGET, stream): its connection closed
-OP_TAP = 6  # (OP_TAP, tap, spec): a wiretap, as the observers' process rebuilds it
-OP_STREAM = 7  # (OP_STREAM, stream, tap, conn)
-OP_SUB = 8  # (OP_SUB, number, kinds, devices, maxlen): a subscription in the process
-OP_UNSUB = 9  # (OP_UNSUB, number)
-OP_WRITE = 10  # (OP_WRITE, "trace" | "pcap", path, start_wall): a file the process writes
-STREAM_OPS = {OP_IN: "inbound", OP_POLL: "poll", OP_OUT: "outbound", OP_REJECTED: "rejected"}
-
 # as Starlette's send_json: compact, not ASCII-escaped (one encoder, made once)
 _ENCODE = json.JSONEncoder(separators=(",", ":"), ensure_ascii=False).encode
 
 Listener = Callable[[int, str, str, Mapping[str, object]], None]
-
-
-class Tapped(Protocol):
-    """A wiretap's stream as the bus knows it (fieldtwin.runtime.wiretap.Stream)."""
-
-    conn: str
-
-    @property
-    def tap(self) -> Any: ...
-
-
-class Link(Protocol):
-    """The observers' process as the bus drives it (fieldtwin.runtime.obslink)."""
-
-    alive: bool
-
-    def ship(self, batch: list[tuple[Any, ...]], lost: int) -> None: ...
-
-    def subscribe(
-        self,
-        kinds: Collection[str] | None,
-        devices: Collection[str] | None,
-        maxlen: int,
-        notify: Callable[[], None] | None,
-    ) -> Any: ...
-
-    def write(self, kind: str, path: str, start_wall: float | None = None) -> None: ...
-
-    def close(self) -> None: ...
 
 
 @dataclass(frozen=True, slots=True)
@@ -367,16 +327,14 @@ class EventBus:
         if self.errors == 1:
             print(f"fieldtwin: an observer failed ({exc!r}); said once", file=sys.stderr)
 
-    def start(self, process: bool = False) -> None:
+    def start(self, process: Callable[[EventBus], Link | None] | None = None) -> None:
         """From now on the simulation's thread only appends records; a thread of the
-        observers' does the work, or (``process``) ships it to a process of the
-        observers' own, fieldtwin.runtime.obslink (idempotent)."""
+        observers' does the work, or ships it to the process ``process`` starts
+        (fieldtwin.runtime.obslink's ``ObserversProcess.start``; idempotent)."""
         if self._thread is not None:
             return
-        if process:
-            from fieldtwin.runtime.obslink import ObserversProcess
-
-            self._link = ObserversProcess.start(self)
+        if process is not None:
+            self._link = process(self)
         # a thread waiting for the interpreter (the simulation's, back from a socket call)
         # gets it after this long at most, not after Python's 5 ms (the web server's
         # thread runs Python too): the observers' work never holds the plant long

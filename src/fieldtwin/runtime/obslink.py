@@ -1,6 +1,6 @@
 """The observers' process, seen from the plant's (DESIGN rule 13; docs/architecture.md).
 
-``fieldtwin run`` starts the bus with ``start(process=True)``: a child process
+``fieldtwin run`` starts the bus with ``start(ObserversProcess.start)``: a child process
 (``python -m fieldtwin.runtime.obsproc``, a fresh interpreter, not a fork of this
 threaded one) is started, and the bus's observers' thread only ships each batch of
 raw records down the child's stdin (``ship``: the lost count and the records, one
@@ -29,7 +29,8 @@ from collections import deque
 from collections.abc import Callable, Collection
 from typing import IO, Any
 
-from fieldtwin.runtime.events import OP_SUB, OP_UNSUB, OP_WRITE, EventBus
+from fieldtwin.runtime.events import EventBus
+from fieldtwin.runtime.obsrecords import OP_SUB, OP_UNSUB, OP_WRITE
 
 STOP_WAIT_S = 10.0  # close() waits this long for the process to write its files and end
 HEADER = struct.Struct(">I")  # the length of each message, both ways

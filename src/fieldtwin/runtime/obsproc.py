@@ -22,16 +22,9 @@ import signal
 import sys
 from typing import IO, Any
 
-from fieldtwin.runtime.events import (
-    OP_STREAM,
-    OP_SUB,
-    OP_TAP,
-    OP_UNSUB,
-    OP_WRITE,
-    EventBus,
-    Subscription,
-)
+from fieldtwin.runtime.events import EventBus, Subscription
 from fieldtwin.runtime.obslink import read_message, say, write_message
+from fieldtwin.runtime.obsrecords import OP_STREAM, OP_SUB, OP_TAP, OP_UNSUB, OP_WRITE
 from fieldtwin.runtime.pcap import PcapWriter
 from fieldtwin.runtime.trace import TraceWriter
 from fieldtwin.runtime.wiretap import Wiretap

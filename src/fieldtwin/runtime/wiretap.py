@@ -20,11 +20,9 @@ per block the line delivered.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from typing import Any
 
-from fieldtwin.clock import SimClock
-from fieldtwin.devices.chars import KIND_SERIAL, CharBlocks
+from fieldtwin.devices.chars import KIND_SERIAL
 from fieldtwin.errors import ProtocolError
 from fieldtwin.modbus.crc import crc_ok
 from fieldtwin.modbus.mbap import MbapDecoder
@@ -32,15 +30,9 @@ from fieldtwin.modbus.pdu import EXCEPTION_FLAG, WRITE_FUNCTIONS, request_length
 from fieldtwin.modbus.rtu import Fault, Frame, RtuFramer
 from fieldtwin.modbus.slave import BROADCAST, SlaveSet
 from fieldtwin.modbus.timing import RtuTiming
-from fieldtwin.runtime.events import (
-    OP_EVENT,
-    OP_FORGET,
-    OP_IN,
-    OP_OUT,
-    OP_POLL,
-    OP_REJECTED,
-    EventBus,
-)
+from fieldtwin.runtime.chartap import CharTap
+from fieldtwin.runtime.events import EventBus
+from fieldtwin.runtime.obsrecords import OP_EVENT, OP_FORGET, OP_IN, OP_OUT, OP_POLL, OP_REJECTED
 from fieldtwin.runtime.wirecodec import (
     ANSWERS,
     BROADCAST_EXECUTED,
@@ -382,21 +374,6 @@ class Wiretap:
         known = slave is not None and slave in self.names
         device = f"{self.endpoint} {slave}" if known else self.endpoint
         self.bus.deliver(t_us, KIND_MODBUS, device, data)
-
-
-class CharTap(CharBlocks):
-    """Publishes the characters of one SCM channel, in and out, in blocks, on ``bus``
-    (fieldtwin.devices.chars: an SCM's own stream publishes the same way)."""
-
-    def __init__(
-        self, bus: EventBus, clock: SimClock, device: str, channel: int, line: str
-    ) -> None:
-        self.bus = bus
-        self.device = device
-        super().__init__(clock, channel, line, self._to_bus, lambda: bus.active)
-
-    def _to_bus(self, start: int, fields: Mapping[str, object]) -> None:
-        self.bus.publish(start, KIND_SERIAL, self.device, dict(fields))
 
 
 __all__ = [
