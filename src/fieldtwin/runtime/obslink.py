@@ -204,9 +204,7 @@ class ObserversProcess:
                     sub = self._subs.get(number)
                 if sub is not None:
                     sub._put(texts, dropped)
-        if self.alive and self.proc.poll() is None:
-            return  # our own close: not a death
-        self._died("the observers' process ended")
+        self._died("the observers' process ended")  # said only if not our own close
 
     def _died(self, why: str) -> None:
         if self.alive:
