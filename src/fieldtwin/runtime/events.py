@@ -28,13 +28,11 @@ writer's queue, fieldtwin.runtime.record).
 from __future__ import annotations
 
 import itertools
-import json
 import sys
 import threading
 import time
 from collections import deque
 from collections.abc import Callable, Collection, Mapping
-from dataclasses import dataclass, field
 from typing import Any
 
 from fieldtwin.runtime.obsrecords import (
@@ -44,6 +42,7 @@ from fieldtwin.runtime.obsrecords import (
     OP_STREAM,
     OP_TAP,
     STREAM_OPS,
+    Event,
     Link,
     Tapped,
 )
@@ -56,32 +55,7 @@ CHUNK = 64  # records handled between two yields of the observers' thread
 YIELD_S = 0.0001  # a yield: long enough for the simulation's thread to take the interpreter
 SWITCH_S = 0.0005  # the interpreter's switch interval once started (Python's default: 5 ms)
 STOP_WAIT_S = 10.0  # close() waits this long for the observers' thread
-# as Starlette's send_json: compact, not ASCII-escaped (one encoder, made once)
-_ENCODE = json.JSONEncoder(separators=(",", ":"), ensure_ascii=False).encode
-
 Listener = Callable[[int, str, str, Mapping[str, object]], None]
-
-
-@dataclass(frozen=True, slots=True)
-class Event:
-    """One thing that happened: when (simulated us), what kind, on which device, its fields."""
-
-    t_us: int
-    kind: str  # "modbus", "serial", "object", "led", "dem", "register", "clock", ...
-    device: str  # the device's address as the Device face writes it ("5", "tcp://...:5020 1")
-    data: Mapping[str, object]
-    _text: list[str] = field(default_factory=list, compare=False, repr=False)
-
-    def as_dict(self) -> dict[str, object]:
-        return {"t_s": self.t_us / 1e6, "kind": self.kind, "device": self.device, **self.data}
-
-    def json(self) -> str:
-        """``as_dict()`` as compact JSON (as Starlette's ``send_json`` writes it), made
-        once however many subscribers send it."""
-        text = self._text
-        if not text:
-            text.append(_ENCODE(self.as_dict()))
-        return text[0]
 
 
 class Subscription:

@@ -3,12 +3,41 @@ plain data, so that a process of the observers' own can take them (obslink, obsp
 
 A record is ``(op, *args)``; a wiretap's stream is named by its number (``attach``),
 a wiretap by its number and rebuilt from its ``spec()`` in the observers' process.
+``Event`` is what the records become (re-exported by fieldtwin.runtime.events).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Collection
+import json
+from collections.abc import Callable, Collection, Mapping
+from dataclasses import dataclass, field
 from typing import Any, Protocol
+
+# as Starlette's send_json: compact, not ASCII-escaped (one encoder, made once)
+_ENCODE = json.JSONEncoder(separators=(",", ":"), ensure_ascii=False).encode
+
+
+@dataclass(frozen=True, slots=True)
+class Event:
+    """One thing that happened: when (simulated us), what kind, on which device, its fields."""
+
+    t_us: int
+    kind: str  # "modbus", "serial", "object", "led", "dem", "register", "clock", ...
+    device: str  # the device's address as the Device face writes it ("5", "tcp://...:5020 1")
+    data: Mapping[str, object]
+    _text: list[str] = field(default_factory=list, compare=False, repr=False)
+
+    def as_dict(self) -> dict[str, object]:
+        return {"t_s": self.t_us / 1e6, "kind": self.kind, "device": self.device, **self.data}
+
+    def json(self) -> str:
+        """``as_dict()`` as compact JSON (as Starlette's ``send_json`` writes it), made
+        once however many subscribers send it."""
+        text = self._text
+        if not text:
+            text.append(_ENCODE(self.as_dict()))
+        return text[0]
+
 
 MAX_STREAMS = 4096  # wiretap streams remembered by number (the oldest forgotten)
 
