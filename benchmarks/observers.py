@@ -16,11 +16,12 @@ The shared kit's C load generator (``mbload``: 8 connections, FC03 x 10 words at
 word 37, closed loop, one epoll thread) then loads each in turn, the order flipped on
 every repetition, so that all of them meet the same machine noise.  Printed per case:
 the median requests per second and its ratio to ``plain``; the server's CPU time per
-request (utime + stime from /proc over the load and the drain after it: what the work
-costs, which the load on the machine disturbs less than throughput); and what the
-observers got: for subscribers, the ``modbus`` events received and those reported
-dropped against the two frames (request, reply) of every request sent; for the files,
-the trace lines, pcap data packets and recorded ``data`` inputs once the servers stopped.
+request (utime + stime from /proc of the server and its observers' process, over the
+load and the drain after it: what the work costs, which the load on the machine
+disturbs less than throughput); and what the observers got: for subscribers, the
+``modbus`` events received and those reported dropped against the two frames
+(request, reply) of every request sent; for the files, the trace lines, pcap data
+packets and recorded ``data`` inputs once the servers stopped.
 
 Subscribers run in a process of their own (``--subscribe``, asyncio + websockets),
 so they never share the server's GIL.  Everything started is stopped by its process id.
@@ -131,12 +132,8 @@ class Server:
     told: list[str] = field(default_factory=list)  # what it said on closing that matters
 
     def ticks(self) -> int:
-        try:
-            with open(f"/proc/{self.proc.pid}/stat") as f:
-                rest = f.read().rsplit(")", 1)[1].split()
-            return int(rest[11]) + int(rest[12])
-        except (OSError, IndexError, ValueError):
-            return 0
+        """CPU ticks of the server and of its children (the observers' process)."""
+        return sum(_ticks(pid) for pid in (self.proc.pid, *_children(self.proc.pid)))
 
     def counts(self) -> dict[str, list[int]] | None:
         sub = self.subscriber
@@ -147,6 +144,26 @@ class Server:
         sub.stdin.flush()
         answer: dict[str, list[int]] = json.loads(sub.stdout.readline())
         return answer
+
+
+def _ticks(pid: int) -> int:
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            rest = f.read().rsplit(")", 1)[1].split()
+        return int(rest[11]) + int(rest[12])
+    except (OSError, IndexError, ValueError):
+        return 0
+
+
+def _children(pid: int) -> list[int]:
+    out: list[int] = []
+    try:
+        for task in os.listdir(f"/proc/{pid}/task"):
+            with open(f"/proc/{pid}/task/{task}/children") as f:
+                out.extend(int(child) for child in f.read().split())
+    except (OSError, ValueError):
+        pass
+    return out
 
 
 def _read_line(stream: IO[str], pattern: str, deadline: float, seen: list[str]) -> str:

@@ -124,17 +124,35 @@ class Session:
         return binding.lines
 
     def write_files(self, trace: str | None = None, pcap: str | None = None) -> None:
-        """The --trace and --pcap writers, flushed and closed with the session."""
+        """The --trace and --pcap writers, flushed and closed with the session: in the
+        observers' process when it runs (the file checked here first), else here."""
         from fieldtwin.runtime.pcap import PcapWriter
         from fieldtwin.runtime.trace import TraceWriter
+
+        events = self.plant.events
 
         def report(text: str) -> None:
             _say(f"fieldtwin: {text}", err=True)
 
-        if trace:
-            self.push(TraceWriter(self.plant.events, trace, report=report).close)
-        if pcap:
-            self.push(PcapWriter(self.plant.events, pcap, report=report, rtu_lines=True).close)
+        def closing(close: Callable[[], None]) -> Callable[[], None]:
+            def both() -> None:
+                events.close()  # what the observers hold reaches the file first
+                close()
+
+            return both
+
+        link = events.link
+        for option, path in (("trace", trace), ("pcap", pcap)):
+            if not path:
+                continue
+            if link is not None:
+                writable(option, path)
+                link.write(option, path)
+            elif option == "trace":
+                self.push(closing(TraceWriter(events, path, report=report).close))
+            else:
+                writer = PcapWriter(events, path, report=report, rtu_lines=True)
+                self.push(closing(writer.close))
 
     def record(self, path: str) -> Recorder:
         """--record FILE: the plant's inputs and outputs from t = 0 (docs/record.md)."""
@@ -158,9 +176,12 @@ class Session:
         self.push(close)
         return recorder
 
-    def start_events(self) -> None:
-        """The observers' work on a thread of theirs (DESIGN rule 13)."""
-        self.plant.events.start()
+    def start_events(self, process: bool = False) -> None:
+        """The observers' work on a thread of theirs, or in a process of their own
+        (``process``; DESIGN rule 13, fieldtwin.runtime.obslink)."""
+        from fieldtwin.runtime.obslink import ObserversProcess
+
+        self.plant.events.start(ObserversProcess.start if process else None)
         self.push(self.plant.events.close)  # what the observers hold reaches the files
 
     def start_control(self, options: ControlOptions) -> Launched:
@@ -236,10 +257,10 @@ def open_run(options: RunOptions) -> Session:
     stop_on_signals(runner)  # from here on a stop is never lost (issue 20)
     session = Session(build_plant(plant_file, runner=runner, speed=speed), runner)
     try:
+        session.start_events(process=True)  # the trace and pcap are written there
         session.write_files(options.trace, options.pcap)  # before any port opens
         if options.record:
             session.record(options.record)
-        session.start_events()
         if options.control is not None:  # before the ports: a master may connect at once
             session.start_control(options.control)
         session.bind(ALL)
@@ -271,6 +292,17 @@ def run(options: RunOptions) -> int:
         _say("\n".join(final))
     _say(f"stopped at t = {session.plant.clock.now / S:.3f} s")
     return 0
+
+
+def writable(option: str, path: str) -> None:
+    """``--trace``/``--pcap`` ``path`` can be written (created empty now), or ConfigError."""
+    from fieldtwin.errors import ConfigError
+
+    try:
+        with open(path, "wb"):
+            pass
+    except OSError as exc:
+        raise ConfigError(f"--{option} {path}: cannot write it ({exc.strerror})") from None
 
 
 def _status(plant: Plant) -> list[str]:

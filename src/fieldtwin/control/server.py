@@ -92,7 +92,12 @@ class ControlServer:
         host = sock.getsockname()[0]
         app = create_app(control, Sim(inbox), token=token, host=host, allow_origins=allow_origins)
         config = uvicorn.Config(
-            app, log_level="warning", lifespan="off", access_log=False, ws_max_size=65536
+            app,
+            log_level="warning",
+            lifespan="off",
+            access_log=False,
+            ws_max_size=65536,
+            ws_per_message_deflate=False,  # the events are sent as they are (loopback)
         )
         self._server = uvicorn.Server(config)
         self._thread = threading.Thread(target=self._serve, name="fieldtwin-control", daemon=True)

@@ -10,25 +10,29 @@ A subscriber that does not keep up loses its oldest events (the bus's bounded
 queue) and is told so by a ``{"kind": "dropped", "count": N}`` message (an item
 of the array in a batch); it never slows the plant and never grows memory beyond
 its queue (docs/control.md).  The events are built and encoded on the observers'
-side (fieldtwin.runtime.events), each once however many subscribers send it.
+side (fieldtwin.runtime.events), each once however many subscribers send it: under
+``fieldtwin run`` in the observers' own process, whose JSON texts are sent as they
+come (fieldtwin.runtime.obslink).
 """
 
 from __future__ import annotations
 
 import asyncio
 import threading
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from fastapi import FastAPI, WebSocket, WebSocketDisconnect
 
 from fieldtwin.errors import ConfigError
 from fieldtwin.runtime.events import DEFAULT_QUEUE, Subscription
+from fieldtwin.runtime.obslink import RemoteSubscription
 
 if TYPE_CHECKING:
     from fieldtwin.control.resources import Control
     from fieldtwin.control.sim import Sim
 
 BATCH = 500  # events taken from the queue per wakeup
+Texts = Subscription | RemoteSubscription  # events as JSON texts (the observers' process's)
 
 
 def _split(text: str | None) -> list[str]:
@@ -98,7 +102,11 @@ def add_stream(app: FastAPI, control: Control, sim: Sim) -> None:
         wakeup = _Wakeup(asyncio.get_running_loop())
         try:
             sub = control.bus.subscribe(
-                _split(params.get("kind")) or None, devices, maxlen=queue, notify=wakeup
+                _split(params.get("kind")) or None,
+                devices,
+                maxlen=queue,
+                notify=wakeup,
+                remote=True,
             )
         except OverflowError as exc:
             await websocket.close(code=1013, reason=str(exc))
@@ -112,10 +120,9 @@ def add_stream(app: FastAPI, control: Control, sim: Sim) -> None:
             sub.close()
 
 
-async def _pump(
-    websocket: WebSocket, sub: Subscription, wakeup: _Wakeup, batched: bool = False
-) -> None:
+async def _pump(websocket: WebSocket, sub: Texts, wakeup: _Wakeup, batched: bool = False) -> None:
     reader = asyncio.ensure_future(websocket.receive())  # a close from the peer ends us
+    remote = isinstance(sub, RemoteSubscription)  # its events come as JSON texts
     dropped = 0
     try:
         while not reader.done():
@@ -135,15 +142,20 @@ async def _pump(
                         told.append(f'{{"kind":"dropped","count":{lost}}}')
                     else:
                         await websocket.send_json({"kind": "dropped", "count": lost})
-                batch = sub.take(BATCH)
+                batch: list[Any] = (
+                    sub.texts(BATCH) if isinstance(sub, RemoteSubscription) else sub.take(BATCH)
+                )
                 if batched and (batch or told) and not reader.done():
-                    told.extend(event.json() for event in batch)
+                    told.extend(batch if remote else (event.json() for event in batch))
                     await websocket.send_text("[" + ",".join(told) + "]")
                 if not batch or reader.done():
                     break
                 if not batched:
-                    for event in batch:
-                        await websocket.send_json(event.as_dict())
+                    for item in batch:  # a text is as send_json writes the event
+                        if remote:
+                            await websocket.send_text(item)
+                        else:
+                            await websocket.send_json(item.as_dict())
     finally:
         reader.cancel()
 

@@ -8,17 +8,16 @@ subscriber does not keep up, its oldest events are dropped and counted, so an ob
 never slows the plant nor grows its memory (DESIGN rule 14).  ``bus.active`` tells a
 publisher whether anybody listens, so that an unobserved plant pays nothing.
 
-Off the hot path: once ``start()`` was called (``fieldtwin run``), what the simulation's
-thread hands the bus is only appended, as a compact raw record (a callable and its
-arguments: the bytes of a frame, the time, the small tuple of a device's state), to
-one bounded buffer (``FEED`` records).  The observers' thread takes the whole buffer
-every ``BATCH_S`` and does the work there, in order: framing and decoding the frames
-(``fieldtwin.runtime.wiretap``), building the events, filling the subscriptions, then
-waking each subscriber once per batch (a trace or pcap writer writes its file then,
-the event stream sends its batch).  Were the buffer ever full (the observers' thread
-starved), a record is lost and counted as dropped for every subscriber.  Without
-``start()`` (tests, the console) a record is handled at once on the caller's thread,
-as before.
+Off the hot path: once ``start()`` was called (``fieldtwin run``), the simulation's
+thread only appends a raw record of plain data (``OP_*`` of fieldtwin.runtime.obsrecords:
+the bytes of a frame, the time, the small tuple of a device's state) to one bounded
+buffer (``FEED`` records; when full, a record is lost and counted as dropped for every
+subscriber).  The observers' thread takes the buffer every ``BATCH_S`` and ships it to
+the observers' own process (``start(ObserversProcess.start)``, runtime.obslink), which
+frames, decodes, writes the trace and pcap and filters each ``/events`` subscriber
+(``subscribe(remote=True)``); subscribers in this process (the console's ``trace``;
+all when that process could not start) are served on the observers' thread, in order.
+Without ``start()`` (tests, the console) a record is handled at once, as before.
 
 ``listen(kinds, callback)`` is the one exception: the callback runs on the simulation's
 thread at the instant of publication (a recording's SCM and DEM records, which must
@@ -28,14 +27,25 @@ writer's queue, fieldtwin.runtime.record).
 
 from __future__ import annotations
 
-import json
+import itertools
 import sys
 import threading
 import time
 from collections import deque
 from collections.abc import Callable, Collection, Mapping
-from dataclasses import dataclass, field
 from typing import Any
+
+from fieldtwin.runtime.obsrecords import (
+    MAX_STREAMS,
+    OP_EVENT,
+    OP_FORGET,
+    OP_STREAM,
+    OP_TAP,
+    STREAM_OPS,
+    Event,
+    Link,
+    Tapped,
+)
 
 DEFAULT_QUEUE = 10_000  # events a subscriber may have unread before the oldest are dropped
 MAX_SUBSCRIBERS = 64  # subscriptions one bus accepts at once
@@ -45,33 +55,7 @@ CHUNK = 64  # records handled between two yields of the observers' thread
 YIELD_S = 0.0001  # a yield: long enough for the simulation's thread to take the interpreter
 SWITCH_S = 0.0005  # the interpreter's switch interval once started (Python's default: 5 ms)
 STOP_WAIT_S = 10.0  # close() waits this long for the observers' thread
-
-# as Starlette's send_json: compact, not ASCII-escaped (one encoder, made once)
-_ENCODE = json.JSONEncoder(separators=(",", ":"), ensure_ascii=False).encode
-
 Listener = Callable[[int, str, str, Mapping[str, object]], None]
-
-
-@dataclass(frozen=True, slots=True)
-class Event:
-    """One thing that happened: when (simulated us), what kind, on which device, its fields."""
-
-    t_us: int
-    kind: str  # "modbus", "serial", "object", "led", "dem", "register", "clock", ...
-    device: str  # the device's address as the Device face writes it ("5", "tcp://...:5020 1")
-    data: Mapping[str, object]
-    _text: list[str] = field(default_factory=list, compare=False, repr=False)
-
-    def as_dict(self) -> dict[str, object]:
-        return {"t_s": self.t_us / 1e6, "kind": self.kind, "device": self.device, **self.data}
-
-    def json(self) -> str:
-        """``as_dict()`` as compact JSON (as Starlette's ``send_json`` writes it), made
-        once however many subscribers send it."""
-        text = self._text
-        if not text:
-            text.append(_ENCODE(self.as_dict()))
-        return text[0]
 
 
 class Subscription:
@@ -127,6 +111,10 @@ class Subscription:
             count = min(limit, len(self._queue))
             return [self._queue.popleft() for _ in range(count)]
 
+    def texts(self, limit: int = 1000) -> list[str]:
+        """``take(limit)`` as each event's JSON text (what ``/events`` sends)."""
+        return [event.json() for event in self.take(limit)]
+
     def __len__(self) -> int:
         return len(self._queue)
 
@@ -152,25 +140,36 @@ class EventBus:
         self._thread: threading.Thread | None = None
         self._closing = False
         self.errors = 0  # records whose handling raised (a bug: said once on stderr)
+        self._ids = itertools.count(1)  # numbers of wiretaps, streams, subscriptions
+        self._streams: dict[int, Any] = {}  # number -> wiretap.Stream (OP_IN ... OP_REJECTED)
+        self._link: Link | None = None  # the observers' process, when it runs
+        self._taps: set[int] = set()  # wiretaps the process was told of
+        self.remote = 0  # subscriptions and file writers the process holds
 
     @property
     def active(self) -> bool:
         """True while somebody listens: publishers may skip building events otherwise."""
-        return bool(self._subs) or bool(self._listeners)
+        return bool(self._subs) or bool(self._listeners) or self.remote > 0
 
     @property
     def watched(self) -> bool:
         """True while a subscription exists (a wiretap's frames go only to those)."""
-        return bool(self._subs)
+        return bool(self._subs) or self.remote > 0
+
+    @property
+    def link(self) -> Link | None:
+        """The observers' process, while it runs."""
+        link = self._link
+        return link if link is not None and link.alive else None
 
     # --- the simulation's side ---------------------------------------------------------
 
     def post(self, record: tuple[Any, ...]) -> None:
-        """Hand the observers one raw record: ``(handler, *args)``; the handler runs on the
+        """Hand the observers one raw record (``OP_*``, plain data), handled on the
         observers' side (at once when the bus was not started)."""
         feed = self._feed
         if feed is None:
-            record[0](*record[1:])
+            self.handle(record)
             return
         if len(feed) >= self.feed_size:
             self._lost += 1
@@ -179,12 +178,41 @@ class EventBus:
         if len(feed) == 1:
             self._wake.set()
 
+    def control(self, record: tuple[Any, ...]) -> None:
+        """A control record: in order with the data, never refused."""
+        feed = self._feed
+        if feed is None:
+            self.handle(record)
+        else:
+            feed.append(record)
+            self._wake.set()
+
     def publish(self, t_us: int, kind: str, device: str, data: Mapping[str, object]) -> None:
         for kinds, callback in self._listeners:
             if kind in kinds:
                 callback(t_us, kind, device, data)
-        if self._subs:
-            self.post((self.deliver, t_us, kind, device, data))
+        if self._subs or self.remote:
+            self.post((OP_EVENT, t_us, kind, device, data))
+
+    def attach(self, stream: Tapped, number: int | None = None) -> int:
+        """Number ``stream`` (a wiretap's) for the records that name it; the observers'
+        process is told of it (and of its wiretap, the first time)."""
+        if number is None:
+            number = next(self._ids)
+        streams = self._streams
+        if len(streams) >= MAX_STREAMS:
+            streams.pop(next(iter(streams)))
+        streams[number] = stream
+        if self._link is not None and self._feed is not None:
+            tap = stream.tap
+            if tap.tid not in self._taps:
+                self._taps.add(tap.tid)
+                self.control((OP_TAP, tap.tid, tap.spec()))
+            self.control((OP_STREAM, number, tap.tid, stream.conn))
+        return number
+
+    def new_id(self) -> int:
+        return next(self._ids)
 
     def listen(self, kinds: Collection[str], callback: Listener) -> Callable[[], None]:
         """Call ``callback(t_us, kind, device, data)`` on the publishing (simulation's)
@@ -200,6 +228,18 @@ class EventBus:
         return stop
 
     # --- the observers' side -----------------------------------------------------------
+
+    def handle(self, record: tuple[Any, ...]) -> None:
+        """One raw record, in this process."""
+        op = record[0]
+        if op == OP_EVENT:
+            self.deliver(*record[1:])
+        elif op in STREAM_OPS:
+            stream = self._streams.get(record[1])
+            if stream is not None:
+                getattr(stream, STREAM_OPS[op])(*record[2:])
+        elif op == OP_FORGET:
+            self._streams.pop(record[1], None)
 
     def deliver(self, t_us: int, kind: str, device: str, data: Mapping[str, object]) -> None:
         """One event to every subscription that wants it (the observers' side)."""
@@ -222,22 +262,35 @@ class EventBus:
         handled = 0
         with self._round:
             while feed:
-                count = min(CHUNK, len(feed))
-                for _ in range(count):
-                    record = feed.popleft()
-                    try:
-                        record[0](*record[1:])
-                    except Exception as exc:  # a decoder's bug: told, the plant runs on
-                        self._failed(exc)
-                handled += count
-                self._wake_subscribers()  # a file writer drains its queue chunk by chunk
-                if feed:
-                    time.sleep(YIELD_S)  # the simulation's thread may want the interpreter
+                batch = [feed.popleft() for _ in range(len(feed))]
+                lost, self._lost = self._lost, 0
+                link = self._link
+                if link is not None:
+                    link.ship(batch, lost)  # the observers' process does the work
+                if self._subs:
+                    self._here(batch, lost)
+                else:  # nobody here: only what the stream table needs
+                    for record in batch:
+                        if record[0] == OP_FORGET:
+                            self._streams.pop(record[1], None)
+                handled += len(batch)
             self._wake_subscribers()
         return handled
 
-    def _wake_subscribers(self) -> None:
-        lost, self._lost = self._lost, 0
+    def _here(self, batch: list[tuple[Any, ...]], lost: int) -> None:
+        """The work of ``batch`` on this thread, for the subscribers in this process."""
+        self._wake_subscribers(lost)
+        for start in range(0, len(batch), CHUNK):
+            if start:
+                time.sleep(YIELD_S)  # the simulation's thread may want the interpreter
+            for record in batch[start : start + CHUNK]:
+                try:
+                    self.handle(record)
+                except Exception as exc:  # a decoder's bug: told, the plant runs on
+                    self._failed(exc)
+            self._wake_subscribers()  # a file writer drains its queue chunk by chunk
+
+    def _wake_subscribers(self, lost: int = 0) -> None:
         for sub in self._subs:
             if lost:
                 sub._lost(lost)
@@ -248,11 +301,14 @@ class EventBus:
         if self.errors == 1:
             print(f"fieldtwin: an observer failed ({exc!r}); said once", file=sys.stderr)
 
-    def start(self) -> None:
+    def start(self, process: Callable[[EventBus], Link | None] | None = None) -> None:
         """From now on the simulation's thread only appends records; a thread of the
-        observers' does the work (idempotent)."""
+        observers' does the work, or ships it to the process ``process`` starts
+        (fieldtwin.runtime.obslink's ``ObserversProcess.start``; idempotent)."""
         if self._thread is not None:
             return
+        if process is not None:
+            self._link = process(self)
         # a thread waiting for the interpreter (the simulation's, back from a socket call)
         # gets it after this long at most, not after Python's 5 ms (the web server's
         # thread runs Python too): the observers' work never holds the plant long
@@ -282,6 +338,9 @@ class EventBus:
             thread.join(STOP_WAIT_S)
         self.process()
         self._feed = None  # what is published from now on is handled at once
+        link, self._link = self._link, None
+        if link is not None:
+            link.close()  # the process writes what it holds, closes its files, ends
 
     # --- subscriptions -----------------------------------------------------------------
 
@@ -292,15 +351,21 @@ class EventBus:
         *,
         maxlen: int = DEFAULT_QUEUE,
         notify: Callable[[], None] | None = None,
-    ) -> Subscription:
+        remote: bool = False,
+    ) -> Any:
         """A new subscription; ``notify`` is called when events came: on each event when
-        the bus was not started, else once per batch from the observers' thread."""
+        the bus was not started, else once per batch from the observers' thread.
+        ``remote``: filtered and encoded in the observers' process when it runs (its
+        ``texts()`` are what it sent; fieldtwin.runtime.obslink), here otherwise."""
         if maxlen < 1:
             raise ValueError("a subscription holds at least one event")
-        sub = Subscription(self, kinds, devices, maxlen, notify)
         with self._lock:
-            if len(self._subs) >= self.max_subscribers:
+            if len(self._subs) + self.remote >= self.max_subscribers:
                 raise OverflowError(f"at most {self.max_subscribers} subscribers at once")
+            link = self.link if remote else None
+            if link is not None:
+                return link.subscribe(kinds, devices, maxlen, notify)
+            sub = Subscription(self, kinds, devices, maxlen, notify)
             self._subs = (*self._subs, sub)
         return sub
 
@@ -314,6 +379,7 @@ __all__ = [
     "DEFAULT_QUEUE",
     "FEED",
     "MAX_SUBSCRIBERS",
+    "OP_EVENT",
     "Event",
     "EventBus",
     "Subscription",

@@ -20,10 +20,9 @@ per block the line delivered.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from typing import Any
 
-from fieldtwin.clock import SimClock
-from fieldtwin.devices.chars import KIND_SERIAL, CharBlocks
+from fieldtwin.devices.chars import KIND_SERIAL
 from fieldtwin.errors import ProtocolError
 from fieldtwin.modbus.crc import crc_ok
 from fieldtwin.modbus.mbap import MbapDecoder
@@ -31,7 +30,9 @@ from fieldtwin.modbus.pdu import EXCEPTION_FLAG, WRITE_FUNCTIONS, request_length
 from fieldtwin.modbus.rtu import Fault, Frame, RtuFramer
 from fieldtwin.modbus.slave import BROADCAST, SlaveSet
 from fieldtwin.modbus.timing import RtuTiming
+from fieldtwin.runtime.chartap import CharTap
 from fieldtwin.runtime.events import EventBus
+from fieldtwin.runtime.obsrecords import OP_EVENT, OP_FORGET, OP_IN, OP_OUT, OP_POLL, OP_REJECTED
 from fieldtwin.runtime.wirecodec import (
     ANSWERS,
     BROADCAST_EXECUTED,
@@ -63,7 +64,7 @@ MAX_REJECTED = 256  # bytes of one rejected chunk kept in its event (one RTU fra
 class Stream:
     """The tap on one transport (a TCP connection or an RTU line)."""
 
-    def __init__(self, tap: Wiretap, conn: str) -> None:
+    def __init__(self, tap: Wiretap, conn: str, number: int | None = None) -> None:
         self.tap = tap
         self.conn = conn
         self._mbap = MbapDecoder()
@@ -72,20 +73,21 @@ class Stream:
         self._pending: dict[int, tuple[object, object, bytes | None]] = {}
         self.rtu = self._framer is not None
         self._states: tuple[State, ...] | None = None  # what the record being decoded met
+        self.sid = tap.bus.attach(self, number)  # the number its records name it by
 
     # -- the pump's calls (the simulation's thread): one raw record each -------------
 
     def seen_in(self, data: bytes, now: int) -> None:
         """A chunk arrived (before the core sees it: the TES states it meets are now's)."""
-        self.tap.bus.post((self.inbound, bytes(data), now, self.tap.states(self.rtu)))
+        self.tap.bus.post((OP_IN, self.sid, bytes(data), now, self.tap.states(self.rtu)))
 
     def seen_poll(self, now: int) -> None:
         """The core was polled (an RTU line: a frame may end by silence now)."""
         if self.rtu:
-            self.tap.bus.post((self.poll, now, self.tap.states(True)))
+            self.tap.bus.post((OP_POLL, self.sid, now, self.tap.states(True)))
 
     def seen_out(self, data: bytes, now: int) -> None:
-        self.tap.bus.post((self.outbound, bytes(data), now))
+        self.tap.bus.post((OP_OUT, self.sid, bytes(data), now))
 
     def seen_connection(self, now: int, state: str, by: str) -> None:
         """A TCP connection opened (``open``) or closed (``fin``, ``rst``) by ``by``
@@ -99,13 +101,15 @@ class Stream:
             "state": state,
             "by": by,
         }
-        tap.bus.post((tap.bus.deliver, now, KIND_CONNECTION, tap.endpoint, data))
+        tap.bus.post((OP_EVENT, now, KIND_CONNECTION, tap.endpoint, data))
+        if state != "open":  # the connection's stream is done with
+            tap.bus.control((OP_FORGET, self.sid))
 
     def seen_rejected(
         self, data: bytes, now: int, reason: str, note: str, fault: str = "wrong_characters"
     ) -> None:
         """Bytes the line rejected before any framing (runtime/uart.py, a collision)."""
-        self.tap.bus.post((self.rejected, bytes(data), now, reason, note, fault))
+        self.tap.bus.post((OP_REJECTED, self.sid, bytes(data), now, reason, note, fault))
 
     # -- the observers' side: framing, decoding, events --------------------------------
 
@@ -226,9 +230,9 @@ class Stream:
         outcomes = fields.get("tes")
         if not isinstance(outcomes, dict):
             return
-        for device in self.tap.slaves.devices:
-            if outcomes.get(device_name(device)) == BROADCAST_EXECUTED:
-                self._wrote(now, self.tap.slaves.number_of(device), device_name(device), pdu)
+        for number, name in self.tap.roster:
+            if outcomes.get(name) == BROADCAST_EXECUTED:
+                self._wrote(now, number, name, pdu)
 
     def _wrote(self, now: int, unit: int, name: str, pdu: bytes) -> None:
         what = written(pdu)
@@ -269,16 +273,21 @@ _NOTHING: tuple[object, object, bytes | None] = (None, None, None)
 
 
 class Wiretap:
-    """Decodes and publishes the frames of one Modbus server."""
+    """Decodes and publishes the frames of one Modbus server.
+
+    On the simulation's side it holds the ``slaves`` (whose states a request meets);
+    the decoding needs only their numbers and names (``roster``): a wiretap is rebuilt
+    from ``spec()`` in the observers' process (fieldtwin.runtime.obsproc)."""
 
     def __init__(
         self,
         bus: EventBus,
         endpoint: str,
         transport: str,
-        slaves: SlaveSet,
+        slaves: SlaveSet | None,
         timing: RtuTiming | None,
         where: str = "",
+        roster: tuple[tuple[int, str], ...] | None = None,
     ) -> None:
         self.bus = bus
         self.endpoint = endpoint  # as the plant file names it
@@ -286,17 +295,31 @@ class Wiretap:
         self.transport = transport  # "tcp", "rtu+tcp", "rtu"
         self.slaves = slaves
         self.timing = timing  # None: MBAP framing
-        self.names = {slaves.number_of(d): device_name(d) for d in slaves.devices}
-        self._numbered = tuple((d, slaves.number_of(d), device_name(d)) for d in slaves.devices)
+        if roster is None:
+            assert slaves is not None
+            roster = tuple((slaves.number_of(d), device_name(d)) for d in slaves.devices)
+        self.roster = roster  # (slave number, TES name) in ``slaves.devices`` order
+        self.names = dict(roster)
+        self.tid = bus.new_id()
         self._outcomes: dict[tuple[object, ...], dict[str, str]] = {}  # remembered, bounded
 
-    def stream(self, conn: str) -> Stream:
-        return Stream(self, conn)
+    def spec(self) -> tuple[Any, ...]:
+        """What the observers' process rebuilds this wiretap from (plain data)."""
+        return (self.endpoint, self.transport, self.roster, self.timing, self.where)
+
+    @classmethod
+    def from_spec(cls, bus: EventBus, spec: tuple[Any, ...]) -> Wiretap:
+        endpoint, transport, roster, timing, where = spec
+        return cls(bus, endpoint, transport, None, timing, where, roster=tuple(roster))
+
+    def stream(self, conn: str, number: int | None = None) -> Stream:
+        return Stream(self, conn, number)
 
     def states(self, rtu: bool) -> tuple[State, ...]:
         """Each TES's state now, in ``slaves.devices`` order (the simulation's thread)."""
-        link = self.slaves.link
-        return tuple(state(device, link, rtu) for device in self.slaves.devices)
+        slaves = self.slaves
+        assert slaves is not None  # the simulation's side
+        return tuple(state(device, slaves.link, rtu) for device in slaves.devices)
 
     def outcomes(
         self, unit: int, pdu: bytes, rtu: bool, states: tuple[State, ...] | None = None
@@ -320,8 +343,8 @@ class Wiretap:
         self, unit: int, writes: bool, rtu: bool, states: tuple[State, ...]
     ) -> dict[str, str]:
         out: dict[str, str] = {}
-        single = len(self._numbered) == 1
-        for (_, number, name), meets in zip(self._numbered, states, strict=True):
+        single = len(self.roster) == 1
+        for (number, name), meets in zip(self.roster, states, strict=True):
             if unit == BROADCAST:
                 result = outcome_of(meets)
                 if result == ANSWERS:
@@ -348,24 +371,9 @@ class Wiretap:
             "slave": slave,
             **fields,
         }
-        known = slave is not None and self.slaves.get(slave) is not None
+        known = slave is not None and slave in self.names
         device = f"{self.endpoint} {slave}" if known else self.endpoint
         self.bus.deliver(t_us, KIND_MODBUS, device, data)
-
-
-class CharTap(CharBlocks):
-    """Publishes the characters of one SCM channel, in and out, in blocks, on ``bus``
-    (fieldtwin.devices.chars: an SCM's own stream publishes the same way)."""
-
-    def __init__(
-        self, bus: EventBus, clock: SimClock, device: str, channel: int, line: str
-    ) -> None:
-        self.bus = bus
-        self.device = device
-        super().__init__(clock, channel, line, self._to_bus, lambda: bus.active)
-
-    def _to_bus(self, start: int, fields: Mapping[str, object]) -> None:
-        self.bus.publish(start, KIND_SERIAL, self.device, dict(fields))
 
 
 __all__ = [

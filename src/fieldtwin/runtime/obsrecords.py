@@ -1,0 +1,86 @@
+"""The raw records the simulation's thread hands the observers (fieldtwin.runtime.events):
+plain data, so that a process of the observers' own can take them (obslink, obsproc).
+
+A record is ``(op, *args)``; a wiretap's stream is named by its number (``attach``),
+a wiretap by its number and rebuilt from its ``spec()`` in the observers' process.
+``Event`` is what the records become (re-exported by fieldtwin.runtime.events).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable, Collection, Mapping
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+# as Starlette's send_json: compact, not ASCII-escaped (one encoder, made once)
+_ENCODE = json.JSONEncoder(separators=(",", ":"), ensure_ascii=False).encode
+
+
+@dataclass(frozen=True, slots=True)
+class Event:
+    """One thing that happened: when (simulated us), what kind, on which device, its fields."""
+
+    t_us: int
+    kind: str  # "modbus", "serial", "object", "led", "dem", "register", "clock", ...
+    device: str  # the device's address as the Device face writes it ("5", "tcp://...:5020 1")
+    data: Mapping[str, object]
+    _text: list[str] = field(default_factory=list, compare=False, repr=False)
+
+    def as_dict(self) -> dict[str, object]:
+        return {"t_s": self.t_us / 1e6, "kind": self.kind, "device": self.device, **self.data}
+
+    def json(self) -> str:
+        """``as_dict()`` as compact JSON (as Starlette's ``send_json`` writes it), made
+        once however many subscribers send it."""
+        text = self._text
+        if not text:
+            text.append(_ENCODE(self.as_dict()))
+        return text[0]
+
+
+MAX_STREAMS = 4096  # wiretap streams remembered by number (the oldest forgotten)
+
+# A raw record is plain data: ``(op, *args)``.  The data records (the hot path):
+OP_EVENT = 0  # (OP_EVENT, t_us, kind, device, data): an event as published
+OP_IN = 1  # (OP_IN, stream, bytes, now, states): a chunk arrived (wiretap.Stream)
+OP_POLL = 2  # (OP_POLL, stream, now, states): the core was polled
+OP_OUT = 3  # (OP_OUT, stream, bytes, now): a transmission
+OP_REJECTED = 4  # (OP_REJECTED, stream, bytes, now, reason, note, fault)
+# ... and the control records, never refused by a full buffer:
+OP_FORGET = 5  # (OP_FORGET, stream): its connection closed
+OP_TAP = 6  # (OP_TAP, tap, spec): a wiretap, as the observers' process rebuilds it
+OP_STREAM = 7  # (OP_STREAM, stream, tap, conn)
+OP_SUB = 8  # (OP_SUB, number, kinds, devices, maxlen): a subscription in the process
+OP_UNSUB = 9  # (OP_UNSUB, number)
+OP_WRITE = 10  # (OP_WRITE, "trace" | "pcap", path, start_wall): a file the process writes
+STREAM_OPS = {OP_IN: "inbound", OP_POLL: "poll", OP_OUT: "outbound", OP_REJECTED: "rejected"}
+
+
+class Tapped(Protocol):
+    """A wiretap's stream as the bus knows it (fieldtwin.runtime.wiretap.Stream)."""
+
+    conn: str
+
+    @property
+    def tap(self) -> Any: ...
+
+
+class Link(Protocol):
+    """The observers' process as the bus drives it (fieldtwin.runtime.obslink)."""
+
+    alive: bool
+
+    def ship(self, batch: list[tuple[Any, ...]], lost: int) -> None: ...
+
+    def subscribe(
+        self,
+        kinds: Collection[str] | None,
+        devices: Collection[str] | None,
+        maxlen: int,
+        notify: Callable[[], None] | None,
+    ) -> Any: ...
+
+    def write(self, kind: str, path: str, start_wall: float | None = None) -> None: ...
+
+    def close(self) -> None: ...
