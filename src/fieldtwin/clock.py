@@ -69,6 +69,10 @@ class SimClock:
         self._now = start
         self._heap: list[list[Any]] = []
         self._seq = itertools.count()
+        # reserve(): the sequence number the next ``schedule`` would take, taken now: an
+        # event scheduled later with it (``schedule_as``) runs in the order it would have
+        # run in had it been scheduled now
+        self.reserve: Callable[[], int] = self._seq.__next__
         self._fired = 0
         self._cancelled = 0  # cancelled entries still in the heap
         # the end of the run_until in progress (-1 outside one, or in run_one): an event
@@ -99,12 +103,6 @@ class SimClock:
         entry = [at, priority, next(self._seq), callback]
         heapq.heappush(self._heap, entry)
         return Handle(self, entry)
-
-    def reserve(self) -> int:
-        """The sequence number the next ``schedule`` would take, taken now: an event
-        scheduled later with it (``schedule_as``) runs in the order it would have run in
-        had it been scheduled now."""
-        return next(self._seq)
 
     def schedule_as(self, at: int, seq: int, callback: Callback) -> Handle:
         """``schedule(at, callback)`` with a sequence number taken by ``reserve``."""

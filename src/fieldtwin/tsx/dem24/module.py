@@ -262,14 +262,13 @@ class Dem24(IntelligentModule):
                 config.t_max_s, config.n_max, config.t_min_s, config.n_min
             )
             kept = self.shortcuts and self.kept_checks
-            clock = self.clock
             self.oscillation = Monitor(
                 th,
                 CHANNELS,
                 self._check_at,
                 self._normal_again,
                 inline=self.shortcuts,
-                kept=(lambda: clock.now, clock.reserve, self._check_as) if kept else None,
+                kept=(self.clock.reserve, self._check_as) if kept else None,
             )
         monitored = config.supply_monitoring and not self.supply
         if monitored != self.fault_active(FB_SUPPLY):
@@ -338,7 +337,7 @@ class Dem24(IntelligentModule):
         state = int(level)
         oscillation = self.oscillation
         if oscillation is not None:
-            state = oscillation.judge(channel, edge, state)  # DEM 2.3-3
+            state = oscillation.judge(channel, edge, state, now)  # DEM 2.3-3
         if not self.shortcuts:
             if state >= 0:
                 self._log_change(channel, state, stamp)

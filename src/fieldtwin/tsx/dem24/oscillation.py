@@ -114,8 +114,8 @@ OSCILLATION: Table[OscState, OscEvent] = Table(
 
 Schedule = Callable[[int, Callable[[int], None]], Handle]
 ScheduleAs = Callable[[int, int, Callable[[int], None]], Handle]
-# what a kept check needs: the time now, a sequence number reserved, a schedule with it
-KeptChecks = tuple[Callable[[], int], Callable[[], int], ScheduleAs]
+# what a kept check needs: a sequence number reserved, a schedule with it
+KeptChecks = tuple[Callable[[], int], ScheduleAs]
 
 
 def _no_schedule_as(at: int, seq: int, callback: Callable[[int], None]) -> Handle:
@@ -132,7 +132,6 @@ class Monitor:
         "_checks",
         "_handles",
         "_normal",
-        "_now",
         "_reserve",
         "_schedule",
         "_schedule_as",
@@ -167,12 +166,12 @@ class Monitor:
         self.kept = kept is not None
         self._wanted: list[tuple[int, int] | None] = [None] * channels
         if kept is not None:
-            self._now, self._reserve, self._schedule_as = kept
+            self._reserve, self._schedule_as = kept
         else:
-            self._now = self._reserve = int
+            self._reserve = int
             self._schedule_as = _no_schedule_as
 
-    def judge(self, channel: int, edge: int, state: int) -> int:
+    def judge(self, channel: int, edge: int, state: int, now: int = 0) -> int:
         """The state to log for a change at ``edge``: ``state``, 2 = oscillating, or -1
         while oscillating (DEM 2.3-3 "its transitions will no longer be indicated")."""
         detector = self.detectors[channel]
@@ -195,12 +194,12 @@ class Monitor:
         declared = detector.declared_at + 1
         if declared > at:
             at = declared
-        if self.kept:
-            now = self._now()
+        if self.kept:  # ``now``: the confirmation's instant
             if at < now:  # as _check_at does
                 at = now
             seq = self._reserve()  # where schedule would have taken its number
-            if handle is not None and handle.active and handle.time <= at:
+            # handle.active and handle.time <= at, read from the clock's entry
+            if handle is not None and (entry := handle._entry)[3] is not None and entry[0] <= at:
                 self._wanted[channel] = (at, seq)  # the armed check moves there
             else:
                 if handle is not None:
