@@ -173,7 +173,8 @@ class Monitor:
 
     def judge(self, channel: int, edge: int, state: int, now: int = 0) -> int:
         """The state to log for a change at ``edge``: ``state``, 2 = oscillating, or -1
-        while oscillating (DEM 2.3-3 "its transitions will no longer be indicated")."""
+        while oscillating (DEM 2.3-3 "its transitions will no longer be indicated").
+        ``now``, the confirmation's instant, is read by a kept check only."""
         detector = self.detectors[channel]
         if not self.inline or detector.machine.state is not OscState.OSCILLATING:
             if detector.transition(edge):
