@@ -69,8 +69,15 @@ class SimClock:
         self._now = start
         self._heap: list[list[Any]] = []
         self._seq = itertools.count()
+        # reserve(): the sequence number the next ``schedule`` would take, taken now: an
+        # event scheduled later with it (``schedule_as``) runs in the order it would have
+        # run in had it been scheduled now
+        self.reserve: Callable[[], int] = self._seq.__next__
         self._fired = 0
         self._cancelled = 0  # cancelled entries still in the heap
+        # the end of the run_until in progress (-1 outside one, or in run_one): an event
+        # may run inline (run_inline) only up to it
+        self._until = -1
         # one object per clock that devices share, by name (the TES inputs' beat)
         self.shared: dict[str, Any] = {}
 
@@ -96,6 +103,29 @@ class SimClock:
         entry = [at, priority, next(self._seq), callback]
         heapq.heappush(self._heap, entry)
         return Handle(self, entry)
+
+    def schedule_as(self, at: int, seq: int, callback: Callback) -> Handle:
+        """``schedule(at, callback)`` with a sequence number taken by ``reserve``."""
+        if at < self._now:
+            raise ConfigError(f"cannot schedule at {at} us: time is already {self._now} us")
+        entry = [at, 0, seq, callback]
+        heapq.heappush(self._heap, entry)
+        return Handle(self, entry)
+
+    def run_inline(self, at: int, seq: int, callback: Callback) -> bool:
+        """Run ``callback(at)`` now, from within an event, when that is what the heap
+        would do next: ``at`` within the run in progress and before every entry of the
+        heap (live or cancelled), so nothing else can run, and nobody outside the run can
+        look, between now and ``at``.  The clock moves to ``at`` and counts the event as
+        fired; ``seq`` (from ``reserve``) is spent as ``schedule`` would spend it.  False
+        (nothing done) otherwise: the caller then schedules it with ``schedule_as``."""
+        heap = self._heap
+        if at > self._until or (heap and heap[0][0] <= at):
+            return False
+        self._now = at
+        self._fired += 1
+        callback(at)
+        return True
 
     def _cancelled_one(self) -> None:
         self._cancelled += 1
@@ -128,22 +158,33 @@ class SimClock:
             raise ConfigError(f"time never goes back: {until} us < now {self._now} us")
         heap = self._heap
         pop = heapq.heappop
-        while heap and heap[0][0] <= until:
-            entry = pop(heap)
-            callback = entry[3]
-            if callback is None:
-                self._cancelled -= 1
-                continue
-            self._now = at = entry[0]
-            entry[3] = None
-            self._fired += 1
-            callback(at)
+        outer, self._until = self._until, until
+        try:
+            while heap and heap[0][0] <= until:
+                entry = pop(heap)
+                callback = entry[3]
+                if callback is None:
+                    self._cancelled -= 1
+                    continue
+                self._now = at = entry[0]
+                entry[3] = None
+                self._fired += 1
+                callback(at)
+        finally:
+            self._until = outer
         self._now = until
 
     def run_one(self) -> bool:
         """Run the next live event alone (not the others of its instant); False when
         nothing is scheduled.  A replay uses it to stand between two recorded events."""
         heap = self._heap
+        outer, self._until = self._until, -1  # nothing inline: the caller stands after it
+        try:
+            return self._run_one(heap)
+        finally:
+            self._until = outer
+
+    def _run_one(self, heap: list[list[Any]]) -> bool:
         while heap:
             entry = heapq.heappop(heap)
             callback = entry[_CALLBACK]

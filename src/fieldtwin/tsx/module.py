@@ -187,6 +187,16 @@ class IntelligentModule:
             self._prune_at = max(PRUNE_MIN, 2 * len(handles))
         return handle
 
+    def call_at_as(self, at: int, seq: int, callback: Callable[[int], None]) -> ClockHandle:
+        """``call_at`` with a sequence number reserved earlier (``SimClock.reserve``)."""
+        handle = self.clock.schedule_as(at, seq, callback)
+        handles = self._handles
+        handles.append(handle)
+        if len(handles) > self._prune_at:
+            self._handles = handles = [h for h in handles if h.active]
+            self._prune_at = max(PRUNE_MIN, 2 * len(handles))
+        return handle
+
     # --- the operating-mode machine (DESIGN rule 4: the MODES table below) --
 
     @property

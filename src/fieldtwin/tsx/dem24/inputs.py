@@ -91,9 +91,16 @@ class InputBank:
     ``stepped``: a discrete signal that answers its value and next change in one call
     (:class:`~fieldtwin.signals.base.SteppedSignal`) is asked once per edge; False
     (the reference of the tests) asks ``value_at`` and ``next_change`` as before.
+
+    ``folded``: at a stepped signal's edge the filter's confirmation runs inline
+    (``SimClock.run_inline``) when nothing else is due before its instant: the same
+    callback at the same instant, counted as fired, with the sequence number its
+    scheduling would have taken, so every event keeps its order; only the heap entry
+    is saved.  False (the reference of the tests): always a clock event.
     """
 
     stepped = True
+    folded = True
 
     def __init__(
         self,
@@ -104,6 +111,9 @@ class InputBank:
     ) -> None:
         self.clock = clock
         self._schedule = clock.schedule
+        self._reserve = clock.reserve
+        self._schedule_as = clock.schedule_as
+        self._run_inline = clock.run_inline
         self.thresholds = thresholds
         self._stamp = stamp
         self._accept = accept
@@ -180,6 +190,15 @@ class InputBank:
                     ch.pending = None
                 if self.active and (level and self.supply_ok) != ch.level:
                     ch.edge_t, ch.stamp = t, self._stamp(t)  # stamped at the edge
+                    if self.folded:
+                        # the confirmation's sequence number, then the next edge's (as
+                        # scheduled in this order); inline when nothing comes between
+                        seq = self._reserve()
+                        ch.signal_handle = None if nxt is None else schedule(nxt, ch.follow)
+                        at = t + self.filter_us
+                        if not self._run_inline(at, seq, ch.confirm):
+                            ch.pending = self._schedule_as(at, seq, ch.confirm)
+                        return
                     ch.pending = schedule(t + self.filter_us, ch.confirm)
             ch.signal_handle = None if nxt is None else schedule(nxt, ch.follow)
             return

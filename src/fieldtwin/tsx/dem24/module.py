@@ -80,6 +80,12 @@ class Dem24(IntelligentModule):
     # word and bit recomputed (_refresh_words), set_fault at every message,
     # Detector.transition and Monitor._arm at every edge.
     shortcuts = True
+    # Issue 25, on top of ``shortcuts``: an oscillating input's check stays armed at
+    # an edge and moves itself where the reference re-arms it (Monitor.kept), and a
+    # filter's confirmation runs inline at the edge's event when nothing comes between
+    # (InputBank.folded).  Every event keeps its instant and its order; False (with
+    # ``inputs.folded`` False) is the reference of tests/tsx/dem24/test_kept_checks.py.
+    kept_checks = True
 
     def __init__(
         self,
@@ -255,8 +261,14 @@ class Dem24(IntelligentModule):
             th = OscThresholds.from_config(
                 config.t_max_s, config.n_max, config.t_min_s, config.n_min
             )
+            kept = self.shortcuts and self.kept_checks
             self.oscillation = Monitor(
-                th, CHANNELS, self._check_at, self._normal_again, inline=self.shortcuts
+                th,
+                CHANNELS,
+                self._check_at,
+                self._normal_again,
+                inline=self.shortcuts,
+                kept=(self.clock.reserve, self._check_as) if kept else None,
             )
         monitored = config.supply_monitoring and not self.supply
         if monitored != self.fault_active(FB_SUPPLY):
@@ -271,6 +283,11 @@ class Dem24(IntelligentModule):
         is due 1 us after the edge, the declaration comes at its confirmation)."""
         now = self.clock.now
         return self.call_at(at if at >= now else now, callback)
+
+    def _check_as(self, at: int, seq: int, callback: Callable[[int], None]) -> Handle:
+        """A kept oscillation check at ``at`` with the sequence number ``seq`` (reserved
+        when the reference scheduled it); a power-off cancels it like ``call_at``'s."""
+        return self.call_at_as(at, seq, callback)
 
     def refuse_config(self, diag_word: int) -> None:
         """DEM 3.4-3: awaiting configuration, diagnostic bits, time-stamping stops."""
@@ -320,7 +337,7 @@ class Dem24(IntelligentModule):
         state = int(level)
         oscillation = self.oscillation
         if oscillation is not None:
-            state = oscillation.judge(channel, edge, state)  # DEM 2.3-3
+            state = oscillation.judge(channel, edge, state, now)  # DEM 2.3-3
         if not self.shortcuts:
             if state >= 0:
                 self._log_change(channel, state, stamp)

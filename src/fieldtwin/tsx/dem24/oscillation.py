@@ -113,6 +113,13 @@ OSCILLATION: Table[OscState, OscEvent] = Table(
 
 
 Schedule = Callable[[int, Callable[[int], None]], Handle]
+ScheduleAs = Callable[[int, int, Callable[[int], None]], Handle]
+# what a kept check needs: a sequence number reserved, a schedule with it
+KeptChecks = tuple[Callable[[], int], ScheduleAs]
+
+
+def _no_schedule_as(at: int, seq: int, callback: Callable[[int], None]) -> Handle:
+    raise AssertionError("checks are not kept")  # pragma: no cover
 
 
 class Monitor:
@@ -121,7 +128,18 @@ class Monitor:
     ``normal(channel, now)`` is called when an input is normal again (AMB-DEM-11).
     """
 
-    __slots__ = ("_checks", "_handles", "_normal", "_schedule", "detectors", "inline")
+    __slots__ = (
+        "_checks",
+        "_handles",
+        "_normal",
+        "_reserve",
+        "_schedule",
+        "_schedule_as",
+        "_wanted",
+        "detectors",
+        "inline",
+        "kept",
+    )
 
     def __init__(
         self,
@@ -131,6 +149,7 @@ class Monitor:
         normal: Callable[[int, int], None],
         *,
         inline: bool = True,
+        kept: KeptChecks | None = None,
     ) -> None:
         # inline: an edge of an oscillating input is counted and its check armed in
         # judge itself (False, the reference of the tests: transition and _arm)
@@ -140,10 +159,22 @@ class Monitor:
         self._checks = [self._checker(channel) for channel in range(channels)]
         self._schedule = schedule
         self._normal = normal
+        # kept (with inline): an edge of an oscillating input leaves the armed check
+        # where it is and notes where the reference would re-arm it, with the sequence
+        # number it would take (_wanted); the check, when it fires early, moves itself
+        # there.  Only the check that the reference runs runs: same instants, same order.
+        self.kept = kept is not None
+        self._wanted: list[tuple[int, int] | None] = [None] * channels
+        if kept is not None:
+            self._reserve, self._schedule_as = kept
+        else:
+            self._reserve = int
+            self._schedule_as = _no_schedule_as
 
-    def judge(self, channel: int, edge: int, state: int) -> int:
+    def judge(self, channel: int, edge: int, state: int, now: int = 0) -> int:
         """The state to log for a change at ``edge``: ``state``, 2 = oscillating, or -1
-        while oscillating (DEM 2.3-3 "its transitions will no longer be indicated")."""
+        while oscillating (DEM 2.3-3 "its transitions will no longer be indicated").
+        ``now``, the confirmation's instant, is read by a kept check only."""
         detector = self.detectors[channel]
         if not self.inline or detector.machine.state is not OscState.OSCILLATING:
             if detector.transition(edge):
@@ -158,24 +189,48 @@ class Monitor:
         times.append(edge)
         handles = self._handles
         handle = handles[channel]
-        if handle is not None:
-            handle.cancel()
         th = detector.thresholds
         n_min = th.n_min
         at = times[-n_min] + th.t_min_us if len(times) >= n_min else 0
         declared = detector.declared_at + 1
-        handles[channel] = self._schedule(at if at >= declared else declared, self._checks[channel])
+        if declared > at:
+            at = declared
+        if self.kept:  # ``now``: the confirmation's instant
+            if at < now:  # as _check_at does
+                at = now
+            seq = self._reserve()  # where schedule would have taken its number
+            # handle.active and handle.time <= at, read from the clock's entry
+            if handle is not None and (entry := handle._entry)[3] is not None and entry[0] <= at:
+                self._wanted[channel] = (at, seq)  # the armed check moves there
+            else:
+                if handle is not None:
+                    handle.cancel()
+                self._wanted[channel] = None
+                handles[channel] = self._schedule_as(at, seq, self._checks[channel])
+            return -1
+        if handle is not None:
+            handle.cancel()
+        handles[channel] = self._schedule(at, self._checks[channel])
         return -1
 
     def oscillating(self) -> int:
         """Bit i set while input i is oscillating (DEM 4.2-2 overall-state message)."""
         return sum(int(d.oscillating) << i for i, d in enumerate(self.detectors))
 
+    def check_at(self, channel: int) -> int | None:
+        """When the channel's check runs (None: not armed); where a kept check moves."""
+        wanted = self._wanted[channel]
+        if wanted is not None:
+            return wanted[0]
+        handle = self._handles[channel]
+        return handle.time if handle is not None and handle.active else None
+
     def stop(self) -> None:
         for handle in self._handles:
             if handle is not None:
                 handle.cancel()
         self._handles = [None] * len(self.detectors)
+        self._wanted = [None] * len(self.detectors)
 
     def _checker(self, channel: int) -> Callable[[int], None]:
         return partial(self._check, channel)  # now -> self._check(channel, now)
@@ -185,10 +240,16 @@ class Monitor:
         handle = handles[channel]
         if handle is not None:
             handle.cancel()
+        self._wanted[channel] = None
         at = self.detectors[channel].next_check()
         handles[channel] = None if at is None else self._schedule(at, self._checks[channel])
 
     def _check(self, channel: int, now: int) -> None:
+        wanted = self._wanted[channel]
+        if wanted is not None:  # a kept check, early: it moves where the reference has it
+            self._wanted[channel] = None
+            self._handles[channel] = self._schedule_as(*wanted, self._checks[channel])
+            return
         self._handles[channel] = None
         if self.detectors[channel].check(now):
             self._normal(channel, now)

@@ -31,11 +31,12 @@ def status_word(diag_word: int, logging: bool, ready: bool, supply: bool, defaul
 
 def input_bits(ready: bool, count: int, full: bool, sync_fault: bool, pulse_image: bool) -> int:
     """Ixy,0..7: ready, stack not empty / 70 % / saturated, sync fault, pulse image."""
+    # bools shift as 0 and 1 (no int() call: once per logged edge and per read)
     return (
-        (int(ready) << I_READY)
-        | (int(count > 0) << I_NOT_EMPTY)
-        | (int(count >= NEARLY_FULL) << I_NEARLY_FULL)
-        | (int(full) << I_SATURATED)
-        | (int(sync_fault) << I_SYNC_FAULT)
-        | (int(pulse_image) << I_PULSE)
+        (ready << I_READY)
+        | ((count > 0) << I_NOT_EMPTY)
+        | ((count >= NEARLY_FULL) << I_NEARLY_FULL)
+        | (full << I_SATURATED)
+        | (sync_fault << I_SYNC_FAULT)
+        | (pulse_image << I_PULSE)
     )
