@@ -92,6 +92,11 @@ class SlaveSet:
     def get(self, number: int) -> SlaveDevice | None:
         return self._by_number.get(number)
 
+    @property
+    def by_number(self) -> dict[int, SlaveDevice]:
+        """Every device by its slave number (fixed when the set is made): a copy."""
+        return dict(self._by_number)
+
     def count_all(self, counter: Counter, now: int, times: int = 1) -> None:
         """Every device on the link saw ``times`` more of ``counter``."""
         devices = self.devices

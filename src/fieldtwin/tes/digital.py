@@ -23,6 +23,7 @@ import enum
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from operator import attrgetter
 from typing import Protocol
 
 from fieldtwin.clock import MS, Handle, S, SimClock
@@ -30,6 +31,8 @@ from fieldtwin.signals.base import SteppedSignal
 from fieldtwin.signals.discrete import PulseTrain
 
 TICK = 100 * MS  # §4.1.4 / §6.2.5 chronometers in 1/10 s
+# an input's state by name, for the map's bit words (one C call per input)
+_STATE_OF = {name: attrgetter(name) for name in ("direct", "filtered", "memorized")}
 FILTER_BASE = 5 * MS  # §4.1.1 steps of 5 ms
 MASK32 = 0xFFFFFFFF
 
@@ -317,10 +320,13 @@ class DigitalInputs:
         """A 16-bit word of ``direct``, ``filtered`` or ``memorized`` bits."""
         if self._followed:
             self.sync()
-        out = 0
-        for bit, inp in enumerate(self._inputs[16 * word : 16 * word + 16]):
-            if getattr(inp, attr):
-                out |= 1 << bit
+        out, bit = 0, 1
+        for on in map(
+            _STATE_OF.get(attr) or attrgetter(attr), self._inputs[16 * word : 16 * word + 16]
+        ):
+            if on:
+                out |= bit
+            bit <<= 1
         return out
 
     def restore_memorized(self, word: int) -> None:
