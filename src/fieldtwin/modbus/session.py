@@ -21,7 +21,6 @@ from __future__ import annotations
 import struct
 from collections.abc import Iterable
 from functools import cache
-from typing import cast
 
 from fieldtwin.errors import ProtocolError
 from fieldtwin.modbus.mbap import (
@@ -85,6 +84,9 @@ class TcpSession:
         if SERVER_UNIT not in self._units and len(self.slaves.devices) == 1:
             self._units[SERVER_UNIT] = self.slaves.devices[0]
         self._requests: dict[bytes, Request | Rejection] = {}
+        # the outbox's heap and the decoder's partial frame, read without a call per request
+        self._held = self._outbox.heap
+        self._partial = self._decoder.partial
 
     @property
     def closed(self) -> bool:
@@ -92,9 +94,9 @@ class TcpSession:
 
     def receive(self, data: bytes, now: int) -> None:
         """Bytes that arrived at ``now`` (call ``poll(now)`` next for due replies)."""
-        if self.closed:
+        if self.close_reason is not None:
             return
-        if self.fused and not self._decoder.pending:
+        if self.fused and not self._partial:
             # whole frames from the start, the usual case; a bad length anywhere in the
             # chunk goes the general way (it closes the session before any frame runs)
             size, end = len(data), 0
@@ -128,14 +130,15 @@ class TcpSession:
         ready = self._ready
         if ready:
             self._ready = []
-        if not self._outbox:
+        if not self._held:
             return ready
         return ready + [transmission for transmission, _ in self._outbox.due(now)]
 
     def next_deadline(self) -> int | None:
         if self._ready:
             return self._ready[0].at  # never later than anything in the outbox
-        return self._outbox.next_deadline()
+        held = self._held
+        return held[0].at if held else None
 
     def _put(self, at: int, data: bytes, now: int, device: SlaveDevice | None = None) -> None:
         if at <= now and not self._outbox:
@@ -168,18 +171,15 @@ class TcpSession:
                 requests[pdu] = request
         else:
             request = decode_request(pdu)
-        if request.__class__ is Rejection:
+        if isinstance(request, Rejection):
             device.count(link, _EXCEPTION_REPLIES, now)
             pdu = encode_exception(request.function, request.code)
             reply = encode_mbap(transaction, unit, pdu)
         else:
-            request = cast(Request, request)
             result = device.execute(request, link, now, False)
             kind = request.__class__
             if (
-                kind is ReadWords
-                and result.__class__ is tuple
-                and len(result) == cast(ReadWords, request).count
+                kind is ReadWords and result.__class__ is tuple and len(result) == request.count  # type: ignore[union-attr]
             ):
                 count = len(result)
                 try:
@@ -198,7 +198,7 @@ class TcpSession:
                 counter = _counter_for(result)
             device.count(link, counter, now)
         at = now + device.answer_delay(link)
-        if at <= now and not self._outbox:
+        if at <= now and not self._held:
             self._ready.append(Transmission(at, reply))
         else:
             self._outbox.put(at, reply, device)

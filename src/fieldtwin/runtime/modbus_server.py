@@ -118,7 +118,8 @@ class _Pump:
                 stream.seen_rejected(data, now, COLLISION, note, "crc_errors")
             self._flush(now)
             return
-        stream = self._observed()
+        server = self._server  # _observed() inline: one check when nobody has a wiretap
+        stream = None if server is None or server.wiretap is None else self._observed()
         if stream is not None:
             stream.seen_in(data, now)  # before the core: the TES's state as the request meets it
         self.core.receive(data, now)
@@ -158,7 +159,8 @@ class _Pump:
         self._flush(now)
 
     def _flush(self, now: int) -> None:
-        stream = self._observed()
+        server = self._server
+        stream = None if server is None or server.wiretap is None else self._observed()
         core = self.core
         try:
             if stream is not None:
@@ -171,7 +173,7 @@ class _Pump:
             self._closing("rst", "master")  # the master's end is gone: reset
             self.close()
             return
-        if self._session and core.closed:  # type: ignore[attr-defined]
+        if self._session and core.close_reason is not None:  # type: ignore[attr-defined]
             self.close()
             return
         deadline = core.next_deadline()
