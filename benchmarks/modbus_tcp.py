@@ -11,21 +11,26 @@ the ratio ours / pymodbus.  Bounded: DURATION_S per case.
 With ``--kit DIR`` (the neutral benchmark kit, ../shared/bench on the project's
 machine: a C load generator that does not starve the server on two cores) it
 runs that kit's compare.py instead, by path (never copied here): pymodbus 3.16,
-libmodbus when its anchor is built, and fieldtwin serving a TES 32EST, FC03 and
-FC16 x 10 words at 1 and 8 connections, alternated, medians and ratios against
-pymodbus.  It says so when the kit or its mbload binary is absent.
+libmodbus when its anchor is built (``bash DIR/build.sh`` with libmodbus-dev
+installed), and fieldtwin serving a TES 32EST at 1 and 8 connections, alternated:
+FC03 of words 0..9 (status and inputs: what a SCADA polls first), then FC03 and FC16
+of words 37..46.  After the kit's own tables it prints one summary: medians of
+requests per second and p99, the server's CPU per request (its CPU time from /proc
+over every request it answered, warm-up included) and the ratios against pymodbus
+and libmodbus.  It says so when the kit or its mbload binary is absent.
 
 With ``--counts`` it prints the instructions our server process executes per
-request (benchmarks/counts.py: perf or callgrind), FC03 of 10 words from 8
-connections, for the table device and the TES 32EST: a fixed workload (``--workload
-N``: the server, fed by 8 client processes of N/8 requests each, which are not
-counted), at two sizes, so that start-up cancels out.  The machine's load does not
-move these figures.
+request (benchmarks/counts.py: perf or callgrind) from 8 connections: the table
+device's FC03, and the TES 32EST's FC03 of words 0..9 and FC03 and FC16 of words
+37..46; each a fixed workload (``--workload N``: the server, fed by 8 client
+processes of N/8 requests each, which are not counted), at two sizes, so that
+start-up cancels out.  The machine's load does not move these figures.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import multiprocessing as mp
 import os
 import socket
@@ -38,13 +43,22 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from multiprocessing.queues import Queue
 from pathlib import Path
+from typing import Any
 
 from pymodbus.datastore import ModbusDeviceContext, ModbusSequentialDataBlock, ModbusServerContext
 from pymodbus.server import StartTcpServer
 
 from fieldtwin.clock import SimClock
 from fieldtwin.modbus.mbap import encode_mbap
-from fieldtwin.modbus.model import Counter, Link, ReadWords, Request, Result, SlaveDevice
+from fieldtwin.modbus.model import (
+    Counter,
+    Link,
+    ReadWords,
+    Request,
+    Result,
+    SlaveDevice,
+    WriteWords,
+)
 from fieldtwin.modbus.pdu import encode_request
 from fieldtwin.runtime.modbus_server import serve_tcp
 from fieldtwin.runtime.runner import Runner
@@ -54,6 +68,13 @@ WORDS = 10
 UNIT = 1
 READY_TIMEOUT_S = 10.0
 REPLY_SIZE = 9 + 2 * WORDS
+# --counts: (device, function, first word) of each counted workload: the plain table,
+# then a TES 32EST's status and inputs (words 0..9: what a SCADA polls first), its
+# counters (37..46: read and written)
+COUNTED = (("table", 3, 0), ("tes", 3, 0), ("tes", 3, 37), ("tes", 16, 37))
+# --kit: (first word, functions) of each alternated run of the kit: a TES 32EST's words
+# 0..9 (status, memorized, filtered and direct inputs, outputs), then 37..46
+KIT_CASES = ((0, (3,)), (37, (3, 16)))
 
 
 # --- servers (each in its own process) ------------------------------------------
@@ -77,27 +98,36 @@ class Table:
         return 0
 
 
-def _client_count(port: int, count: int) -> None:
+def _counted_request(fc: int, address: int) -> tuple[Request, int]:
+    """The request of a counted workload and the size of its reply."""
+    if fc == 16:
+        return WriteWords(address, tuple(range(WORDS))), 12
+    return ReadWords(fc, address, WORDS), REPLY_SIZE
+
+
+def _client_count(port: int, count: int, fc: int = 3, address: int = 0) -> None:
     """A counted workload's client: ``count`` requests, one at a time, then exit."""
-    request = encode_request(ReadWords(3, 0, WORDS))
+    request, size = _counted_request(fc, address)
+    frame = encode_request(request)
     with socket.create_connection(("127.0.0.1", port), timeout=60) as sock:
         sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         for tid in range(1, count + 1):
-            sock.sendall(encode_mbap(tid, UNIT, request))
+            sock.sendall(encode_mbap(tid, UNIT, frame))
             got = b""
-            while len(got) < REPLY_SIZE:
+            while len(got) < size:
                 chunk = sock.recv(4096)
                 if not chunk:
                     raise SystemExit("server closed the connection")
                 got += chunk
 
 
-def workload(kind: str, requests: int, connections: int = 8) -> None:
-    """The counted work: our server answering ``requests`` FC03 from ``connections``
-    client processes (started with exec, so a counter does not follow them)."""
+def workload(kind: str, requests: int, connections: int = 8, fc: int = 3, address: int = 0) -> None:
+    """The counted work: our server answering ``requests`` (``fc`` of 10 words at
+    ``address``) from ``connections`` client processes (started with exec, so a
+    counter does not follow them)."""
     runner, port = _our_server(kind)
     each = requests // connections
-    command = [sys.executable, __file__, "--client", str(port), str(each)]
+    command = [sys.executable, __file__, "--client", str(port), str(each), str(fc), str(address)]
     clients = [subprocess.Popen(command) for _ in range(connections)]
     deadline = time.monotonic() + 1800
 
@@ -228,20 +258,24 @@ def main() -> None:
     parser.add_argument("--counts", action="store_true", help="instructions per request")
     parser.add_argument("--workload", type=int, help=argparse.SUPPRESS)
     parser.add_argument("--device", default="table", help=argparse.SUPPRESS)
-    parser.add_argument("--client", nargs=2, type=int, help=argparse.SUPPRESS)
+    parser.add_argument("--fc", type=int, default=3, help=argparse.SUPPRESS)
+    parser.add_argument("--address", type=int, default=0, help=argparse.SUPPRESS)
+    parser.add_argument("--client", nargs=4, type=int, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.client is not None:
         _client_count(*args.client)
         return
     if args.workload is not None:
-        workload(args.device, args.workload)
+        workload(args.device, args.workload, fc=args.fc, address=args.address)
         return
     if args.counts:
         from counts import per_unit
 
-        for device in ("table", "tes"):
-            result = per_unit(__file__, 400, 2000, "request", "--device", device)
-            print(f"fieldtwin server ({device}), 8 connections, FC03: {result}", flush=True)
+        for device, fc, address in COUNTED:
+            extra = ("--device", device, "--fc", str(fc), "--address", str(address))
+            result = per_unit(__file__, 400, 2000, "request", *extra)
+            what = f"FC{fc:02d} x {WORDS} at {address}"
+            print(f"fieldtwin server ({device}), 8 connections, {what}: {result}", flush=True)
         return
     if args.kit is not None:
         raise SystemExit(_kit(Path(args.kit), args.duration, args.reps))
@@ -281,15 +315,71 @@ def _kit(kit: Path, duration: float, reps: int) -> int:
         servers.insert(1, f"libmodbus={anchor} --port {{port}}")
     else:
         print(f"libmodbus anchor not built ({anchor}): pymodbus only", file=sys.stderr)
-    command = [
-        sys.executable, str(compare), "--mode", "tcp", "--reps", str(reps), "--conns", "1,8",
-        "--fc", "3", "--fc", "16", "--addr", "37", "--duration", str(duration),
-        "--baseline", "pymodbus", "--mbload", str(mbload),
-        "--outdir", tempfile.mkdtemp(prefix="modbus_tcp_"),
-    ]  # fmt: skip
-    for server in servers:
-        command += ["--server", server]
-    return subprocess.run(command, cwd=kit, check=False, timeout=3600).returncode
+    status = 0
+    runs: list[dict[str, object]] = []
+    for address, functions in KIT_CASES:
+        outdir = tempfile.mkdtemp(prefix="modbus_tcp_")
+        command = [
+            sys.executable, str(compare), "--mode", "tcp", "--reps", str(reps), "--conns", "1,8",
+            "--addr", str(address), "--duration", str(duration),
+            "--baseline", "pymodbus", "--mbload", str(mbload), "--outdir", outdir,
+        ]  # fmt: skip
+        for fc in functions:
+            command += ["--fc", str(fc)]
+        for server in servers:
+            command += ["--server", server]
+        done = subprocess.run(command, cwd=kit, check=False, timeout=3600)
+        status = status or done.returncode
+        log = Path(outdir) / "runs-tcp.jsonl"
+        if log.is_file():
+            for line in log.read_text().splitlines():
+                run = json.loads(line)
+                run["addr"] = address
+                runs.append(run)
+    print(_kit_summary(runs))
+    return status
+
+
+def _cpu_us(run: dict[str, Any]) -> float | None:
+    """The server's CPU per request (µs): its CPU over the run (warm-up included,
+    from /proc) divided by every request it answered (warm-up included)."""
+    frac, served = (
+        run["cpu"]["server_core_frac"],
+        run.get("requests", 0) + run.get("warmup_done", 0),
+    )
+    if frac is None or not served:
+        return None
+    return float(frac) * float(run["wall_s"]) / served * 1e6
+
+
+def _kit_summary(runs: list[dict[str, Any]]) -> str:
+    """Medians by case and server, the ratios against pymodbus and libmodbus."""
+    rows = [
+        "| words | fc | conns | server | req/s | p99 µs | server CPU µs/request"
+        " | × pymodbus | × libmodbus |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    cases = sorted({(r["addr"], r["fc"], r["conns"]) for r in runs})
+    for address, fc, conns in cases:
+        these = [r for r in runs if (r["addr"], r["fc"], r["conns"]) == (address, fc, conns)]
+        servers = sorted({r["server"] for r in these})
+        rps = {n: statistics.median(r["rps"] for r in these if r["server"] == n) for n in servers}
+        for name in servers:
+            mine = [r for r in these if r["server"] == name]
+            p99 = statistics.median(r["lat_us"].get("p99", 0) for r in mine)
+            cpu = [c for c in map(_cpu_us, mine) if c is not None]
+            cpu_text = f"{statistics.median(cpu):.1f}" if cpu else "-"
+            ratios = [
+                f"{rps[name] / rps[base]:.2f}" if rps.get(base) else "-"
+                for base in ("pymodbus", "libmodbus")
+            ]
+            words = f"{address}..{address + WORDS - 1}"
+            rows.append(
+                f"| {words} | {fc} | {conns} | {name} | {rps[name]:,.0f} | {p99:,.0f} "
+                f"| {cpu_text} | {ratios[0]} | {ratios[1]} |"
+            )
+    load = runs[-1].get("loadavg") if runs else None
+    return "\n".join(rows) + f"\n\nload average at the end: {load}"
 
 
 def _report(results: dict[str, dict[int, Figures]], duration: float) -> None:

@@ -46,6 +46,7 @@ class MbapDecoder:
 
     def __init__(self) -> None:
         self._buf = bytearray()
+        self.partial = self._buf  # the same buffer (empty: no frame begun), read inline
 
     @property
     def pending(self) -> int:

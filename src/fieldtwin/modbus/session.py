@@ -5,20 +5,64 @@ is a broadcast (the server stands for a gateway to a TES line, TES 7.2.6);
 unit id FFh reaches the only device when there is one (Modbus TCP 4.4.2); a
 unit id no device answers to gets exception 0Bh, "gateway target device
 failed to respond".  A stream that cannot be resynchronised closes the session.
+
+The fused path (issue 25 item 2): a chunk of whole frames, the usual case, is cut
+in place (no ``MbapFrame``), the request PDUs of reads and single writes are
+decoded once per distinct PDU (the typed requests are frozen: one object serves
+every poll of the same span), and the replies to word reads and word writes are
+packed header and all with one ``struct`` call.  The same bytes as the general
+path (``fused = False``), the same device calls in the same order, the same
+counters: ``tests/modbus/test_fused_path.py`` runs both over random requests,
+valid and not, exceptions and odd chunks included.
 """
 
 from __future__ import annotations
 
+import struct
 from collections.abc import Iterable
+from functools import cache
 
 from fieldtwin.errors import ProtocolError
-from fieldtwin.modbus.mbap import MODBUS_PROTOCOL, MbapDecoder, MbapFrame, encode_mbap
-from fieldtwin.modbus.model import Counter, Link, SlaveDevice
-from fieldtwin.modbus.pdu import encode_exception
-from fieldtwin.modbus.slave import BROADCAST, Outbox, SlaveSet, Transmission
+from fieldtwin.modbus.mbap import (
+    HEADER,
+    MAX_LENGTH,
+    MIN_LENGTH,
+    MODBUS_PROTOCOL,
+    MbapDecoder,
+    MbapFrame,
+    encode_mbap,
+)
+from fieldtwin.modbus.model import (
+    Counter,
+    Link,
+    NoReply,
+    ReadWords,
+    Request,
+    SlaveDevice,
+    WriteWord,
+    WriteWords,
+)
+from fieldtwin.modbus.pdu import Rejection, decode_request, encode_exception, encode_response
+from fieldtwin.modbus.slave import BROADCAST, Outbox, SlaveSet, Transmission, _counter_for
 
 SERVER_UNIT = 0xFF
 GATEWAY_TARGET_FAILED = 0x0B
+
+_HEAD = struct.Struct(">HHHB")  # transaction, protocol, length, unit
+# decoded request PDUs kept per session (reads and single writes: 5 bytes each); a
+# master polls a few spans over and over, so the set stays small; bounded all the same
+REQUEST_CACHE = 256
+_CACHED_FUNCTIONS = frozenset((1, 2, 3, 4, 5, 6))
+_FRAMES_EXECUTED = Counter.FRAMES_EXECUTED
+_EXCEPTION_REPLIES = Counter.EXCEPTION_REPLIES
+_NOT_READY_REPLIES = Counter.NOT_READY_REPLIES
+_GOOD_FRAMES = Counter.GOOD_FRAMES
+
+
+@cache
+def _read_reply(count: int) -> struct.Struct:
+    """MBAP header, function, byte count and ``count`` words: one read reply."""
+    return struct.Struct(f">HHHBBB{count}H")
 
 
 class TcpSession:
@@ -33,6 +77,16 @@ class TcpSession:
         # outbox's heap; sent in the same order and at the same instant as through it
         self._ready: list[Transmission] = []
         self.close_reason: str | None = None
+        # the fused path (False: every frame through the general one, the reference)
+        self.fused = True
+        # unit id -> device: the slave numbers are fixed when the set is made
+        self._units: dict[int, SlaveDevice] = dict(self.slaves.by_number)
+        if SERVER_UNIT not in self._units and len(self.slaves.devices) == 1:
+            self._units[SERVER_UNIT] = self.slaves.devices[0]
+        self._requests: dict[bytes, Request | Rejection] = {}
+        # the outbox's heap and the decoder's partial frame, read without a call per request
+        self._held = self._outbox.heap
+        self._partial = self._decoder.partial
 
     @property
     def closed(self) -> bool:
@@ -40,8 +94,27 @@ class TcpSession:
 
     def receive(self, data: bytes, now: int) -> None:
         """Bytes that arrived at ``now`` (call ``poll(now)`` next for due replies)."""
-        if self.closed:
+        if self.close_reason is not None:
             return
+        if self.fused and not self._partial:
+            # whole frames from the start, the usual case; a bad length anywhere in the
+            # chunk goes the general way (it closes the session before any frame runs)
+            size, end = len(data), 0
+            while end + HEADER <= size:
+                length = (data[end + 4] << 8) | data[end + 5]
+                if not MIN_LENGTH <= length <= MAX_LENGTH:
+                    end = -1
+                    break
+                if end + HEADER - 1 + length > size:
+                    break
+                end += HEADER - 1 + length
+            if end > 0:
+                start = 0
+                while start < end:
+                    start = self._fused(data, start, now)
+                if end < size:
+                    self._decoder.feed(data[end:])  # the start of the next frame
+                return
         try:
             frames = self._decoder.feed(data)
         except ProtocolError as exc:
@@ -57,20 +130,79 @@ class TcpSession:
         ready = self._ready
         if ready:
             self._ready = []
-        if not self._outbox:
+        if not self._held:
             return ready
         return ready + [transmission for transmission, _ in self._outbox.due(now)]
 
     def next_deadline(self) -> int | None:
         if self._ready:
             return self._ready[0].at  # never later than anything in the outbox
-        return self._outbox.next_deadline()
+        held = self._held
+        return held[0].at if held else None
 
     def _put(self, at: int, data: bytes, now: int, device: SlaveDevice | None = None) -> None:
         if at <= now and not self._outbox:
             self._ready.append(Transmission(at, data))
         else:
             self._outbox.put(at, data, device)
+
+    def _fused(self, data: bytes, start: int, now: int) -> int:
+        """The frame at ``start`` of ``data`` (whole, its length checked): what ``_frame``
+        does, with no frame object and, for word reads and writes, one ``pack``; the
+        offset of the next frame."""
+        transaction, protocol, length, unit = _HEAD.unpack_from(data, start)
+        first: int = start + HEADER
+        end: int = first + length - 1
+        device = self._units.get(unit)
+        if device is None or protocol != MODBUS_PROTOCOL:
+            self._frame(MbapFrame(transaction, unit, data[first:end], protocol), now)
+            return end
+        link = self.link
+        device.count(link, _GOOD_FRAMES, now)
+        pdu = data[first:end]
+        request: Request | Rejection | None
+        if end - first == 5 and data[first] in _CACHED_FUNCTIONS:
+            requests = self._requests
+            request = requests.get(pdu)
+            if request is None:
+                request = decode_request(pdu)
+                if len(requests) >= REQUEST_CACHE:
+                    requests.clear()
+                requests[pdu] = request
+        else:
+            request = decode_request(pdu)
+        if isinstance(request, Rejection):
+            device.count(link, _EXCEPTION_REPLIES, now)
+            pdu = encode_exception(request.function, request.code)
+            reply = encode_mbap(transaction, unit, pdu)
+        else:
+            result = device.execute(request, link, now, False)
+            kind = request.__class__
+            if (
+                kind is ReadWords and result.__class__ is tuple and len(result) == request.count  # type: ignore[union-attr]
+            ):
+                count = len(result)
+                try:
+                    head = (transaction, 0, 3 + 2 * count, unit, data[first], 2 * count)
+                    reply = _read_reply(count).pack(*head, *result)
+                except struct.error:  # not 16-bit words: the general encoder says what
+                    reply = encode_mbap(transaction, unit, encode_response(request, result))
+                counter = _FRAMES_EXECUTED
+            elif result is None and (kind is WriteWords or kind is WriteWord):
+                reply = _HEAD.pack(transaction, 0, 6, unit) + data[first : first + 5]  # the echo
+                counter = _FRAMES_EXECUTED
+            elif result.__class__ is NoReply:
+                return end
+            else:
+                reply = encode_mbap(transaction, unit, encode_response(request, result))
+                counter = _counter_for(result)
+            device.count(link, counter, now)
+        at = now + device.answer_delay(link)
+        if at <= now and not self._held:
+            self._ready.append(Transmission(at, reply))
+        else:
+            self._outbox.put(at, reply, device)
+        return end
 
     def _frame(self, frame: MbapFrame, now: int) -> None:
         if frame.protocol != MODBUS_PROTOCOL:

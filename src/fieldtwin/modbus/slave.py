@@ -92,6 +92,11 @@ class SlaveSet:
     def get(self, number: int) -> SlaveDevice | None:
         return self._by_number.get(number)
 
+    @property
+    def by_number(self) -> dict[int, SlaveDevice]:
+        """Every device by its slave number (fixed when the set is made): a copy."""
+        return dict(self._by_number)
+
     def count_all(self, counter: Counter, now: int, times: int = 1) -> None:
         """Every device on the link saw ``times`` more of ``counter``."""
         devices = self.devices
@@ -173,6 +178,8 @@ class Outbox:
     def __init__(self) -> None:
         self._heap: list[_Pending] = []
         self._seq = itertools.count()
+        # the same list, for a core that tests emptiness or the next deadline inline
+        self.heap: list[_Pending] = self._heap
 
     def __len__(self) -> int:
         return len(self._heap)

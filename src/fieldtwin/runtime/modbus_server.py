@@ -80,6 +80,8 @@ class _Pump:
         self._close_told = False  # the pcap was told how this TCP connection ended
         if server is not None:
             server.pumps[id(self)] = self
+        self._session = isinstance(core, TcpSession)  # a session closes on a bad stream
+        self._line = isinstance(core, RtuLine)  # a line may collide (half duplex)
         if isinstance(transport, TcpTransport):  # its listener may hang up an idle one
             transport.in_progress = self.in_progress
         runner.attach(transport, self.on_data, self.on_close)
@@ -108,7 +110,7 @@ class _Pump:
             self._flush(now)
             return
         core = self.core
-        if isinstance(core, RtuLine) and core.collides(now):
+        if self._line and isinstance(core, RtuLine) and core.collides(now):
             core.collide(data, now)  # half duplex: the master talked over a reply
             stream = self._observed()
             if stream is not None:
@@ -116,7 +118,8 @@ class _Pump:
                 stream.seen_rejected(data, now, COLLISION, note, "crc_errors")
             self._flush(now)
             return
-        stream = self._observed()
+        server = self._server  # _observed() inline: one check when nobody has a wiretap
+        stream = None if server is None or server.wiretap is None else self._observed()
         if stream is not None:
             stream.seen_in(data, now)  # before the core: the TES's state as the request meets it
         self.core.receive(data, now)
@@ -156,11 +159,13 @@ class _Pump:
         self._flush(now)
 
     def _flush(self, now: int) -> None:
-        stream = self._observed()
+        server = self._server
+        stream = None if server is None or server.wiretap is None else self._observed()
+        core = self.core
         try:
             if stream is not None:
                 stream.seen_poll(now)
-            for transmission in self.core.poll(now):
+            for transmission in core.poll(now):
                 self.transport.send(transmission.data)
                 if stream is not None:
                     stream.seen_out(transmission.data, now)
@@ -168,13 +173,15 @@ class _Pump:
             self._closing("rst", "master")  # the master's end is gone: reset
             self.close()
             return
-        if isinstance(self.core, TcpSession) and self.core.closed:
+        if self._session and core.close_reason is not None:  # type: ignore[attr-defined]
             self.close()
             return
-        self._rearm()
+        deadline = core.next_deadline()
+        if deadline is None and self._timer is None and not self._precise:
+            return  # nothing due and nothing armed: what ``_rearm`` would leave
+        self._rearm(deadline)
 
-    def _rearm(self) -> None:
-        deadline = self.core.next_deadline()
+    def _rearm(self, deadline: int | None) -> None:
         if self._wired:
             self._want_precise(deadline is not None)
         timer = self._timer

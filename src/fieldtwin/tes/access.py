@@ -44,18 +44,22 @@ class RegisterFile:
         self.do = do
         self.ai = ai
         self._on_parameter_write = on_parameter_write
+        # looked up once: a cache keyed by the model hashes it (and its Enums) per call
+        self._pairs = _pair_slots(model)
 
     # --- reads -------------------------------------------------------------
 
     def peek(self, reg: Register, now: int) -> int:
         """The word as it stands: no side effect."""
-        return _READERS[reg.kind](self, reg, now) & 0xFFFF
+        # by the kind's id: an Enum's hash is computed in Python (ten a 10-word read)
+        return _READER_BY_ID[id(reg.kind)](self, reg, now) & 0xFFFF
 
     def get(self, reg: Register, now: int) -> int:
         """A master read of the word."""
-        if reg.kind is Kind.MEMORIZED:
+        kind = reg.kind
+        if kind is _MEMORIZED:
             self.di.restore_memorized(reg.index)  # AMB-TES-12: shows in this reply
-        return self.peek(reg, now)
+        return _READER_BY_ID[id(kind)](self, reg, now) & 0xFFFF
 
     def get_words(self, regs: Sequence[Register], now: int) -> tuple[int, ...]:
         """Master reads of consecutive words, in order: ``get`` of each, the 32-bit value
@@ -64,7 +68,7 @@ class RegisterFile:
         last: tuple[str, int] | None = None
         value = 0
         inputs = self.model.digital_inputs
-        pairs = _pair_slots(self.model)  # by address: (kind's name, input, low word) or None
+        pairs = self._pairs  # by address: (kind's name, input, low word) or None
         for reg in regs:
             slot = pairs[reg.address]
             if slot is None:
@@ -130,7 +134,7 @@ class RegisterFile:
 
     def put(self, reg: Register, value: int, now: int) -> None:
         """A master write of an already checked writable word."""
-        writer = _WRITERS.get(reg.kind)
+        writer = _WRITER_BY_ID.get(id(reg.kind))
         if writer is None or not reg.access.writable:
             raise ProtocolError(
                 f"{self.model.name} word {reg.address:03X}h ({reg.name}) is read only"
@@ -145,13 +149,14 @@ class RegisterFile:
         count, j = len(regs), 0
         while j < count:
             reg, kind = regs[j], regs[j].kind
-            if kind in PAIRS and j + 1 < count and not reg.index & 1:
+            name = _PAIR_NAME_BY_ID.get(id(kind))  # a pair's kind (no Enum hash)
+            if name is not None and j + 1 < count and not reg.index & 1:
                 after = regs[j + 1]
                 if after.kind is kind and after.index == reg.index + 1:
                     i = reg.index >> 1
                     if i < inputs:  # AMB-TES-13: inputs the model lacks ignore writes
                         value = (values[j] << 16) | values[j + 1]
-                        self.di.set_value32(_PAIR_NAMES[kind], i, value, now)
+                        self.di.set_value32(name, i, value, now)
                     j += 2
                     continue
             self.put(reg, values[j], now)
@@ -190,6 +195,7 @@ def _splice(mask: int, word: int, value: int) -> int:
 
 Reader = Callable[[RegisterFile, Register, int], int]
 _PAIR_NAMES = {kind: kind.value for kind in PAIRS}  # an Enum's .value is a slow property
+_PAIR_NAME_BY_ID = {id(kind): name for kind, name in _PAIR_NAMES.items()}  # and its hash
 
 
 @functools.cache
@@ -218,15 +224,25 @@ def _pair(rf: RegisterFile, reg: Register, now: int) -> int:
     return rf.pair(reg.kind, reg.index, now)
 
 
-def _bits(rf: RegisterFile, reg: Register, now: int) -> int:
-    return rf.di.bits(reg.kind.value, reg.index)  # direct, filtered or memorized
+# direct, filtered or memorized bits: the name written out, not the Enum's ``value``
+# (a Python-level descriptor, three a 10-word read)
+def _memorized(rf: RegisterFile, reg: Register, now: int) -> int:
+    return rf.di.bits("memorized", reg.index)
+
+
+def _filtered(rf: RegisterFile, reg: Register, now: int) -> int:
+    return rf.di.bits("filtered", reg.index)
+
+
+def _direct(rf: RegisterFile, reg: Register, now: int) -> int:
+    return rf.di.bits("direct", reg.index)
 
 
 _READERS: dict[Kind, Reader] = {
     Kind.STATUS: lambda rf, reg, now: rf.status_word(),
-    Kind.MEMORIZED: _bits,
-    Kind.FILTERED: _bits,
-    Kind.DIRECT: _bits,
+    Kind.MEMORIZED: _memorized,
+    Kind.FILTERED: _filtered,
+    Kind.DIRECT: _direct,
     Kind.OUTPUTS: lambda rf, reg, now: rf.do.mask(now) >> (16 * reg.index),
     Kind.ZERO: lambda rf, reg, now: 0,
     Kind.BLINK_SELECT: lambda rf, reg, now: rf.do.blink_select >> (16 * reg.index),
@@ -280,3 +296,7 @@ _WRITERS: dict[Kind, Writer] = {
 _missing = set(Kind) - set(_READERS)
 if _missing:  # pragma: no cover - a programming error caught at import
     raise ImportError(f"TES register kinds without a reader: {sorted(k.value for k in _missing)}")
+# the readers by the kind's id (members live as long as the process: ids are fixed)
+_READER_BY_ID: dict[int, Reader] = {id(kind): reader for kind, reader in _READERS.items()}
+_WRITER_BY_ID: dict[int, Writer] = {id(kind): writer for kind, writer in _WRITERS.items()}
+_MEMORIZED = Kind.MEMORIZED

@@ -23,6 +23,7 @@ import enum
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from operator import attrgetter
 from typing import Protocol
 
 from fieldtwin.clock import MS, Handle, S, SimClock
@@ -30,6 +31,9 @@ from fieldtwin.signals.base import SteppedSignal
 from fieldtwin.signals.discrete import PulseTrain
 
 TICK = 100 * MS  # §4.1.4 / §6.2.5 chronometers in 1/10 s
+# an input's state by name, for the map's bit words (one C call per input)
+_STATE_OF = {name: attrgetter(name) for name in ("direct", "filtered", "memorized")}
+_CHANGES = attrgetter("changes")
 FILTER_BASE = 5 * MS  # §4.1.1 steps of 5 ms
 MASK32 = 0xFFFFFFFF
 
@@ -317,17 +321,23 @@ class DigitalInputs:
         """A 16-bit word of ``direct``, ``filtered`` or ``memorized`` bits."""
         if self._followed:
             self.sync()
-        out = 0
-        for bit, inp in enumerate(self._inputs[16 * word : 16 * word + 16]):
-            if getattr(inp, attr):
-                out |= 1 << bit
+        out, bit = 0, 1
+        for on in map(
+            _STATE_OF.get(attr) or attrgetter(attr), self._inputs[16 * word : 16 * word + 16]
+        ):
+            if on:
+                out |= bit
+            bit <<= 1
         return out
 
     def restore_memorized(self, word: int) -> None:
         """§4.1.2 a master read: each input of ``word`` with changes toggles once."""
         if self._followed:
             self.sync()
-        for inp in self._inputs[16 * word : 16 * word + 16]:
+        inputs = self._inputs[16 * word : 16 * word + 16]
+        if not any(map(_CHANGES, inputs)):
+            return  # the usual case: nothing changed since the last read
+        for inp in inputs:
             if inp.changes > 0:
                 inp.memorized = not inp.memorized
                 inp.changes -= 1
@@ -336,7 +346,7 @@ class DigitalInputs:
     def changes_pending(self) -> bool:
         if self._followed:
             self.sync()
-        return any(inp.changes for inp in self._inputs)
+        return any(map(_CHANGES, self._inputs))
 
     def direct(self, i: int) -> bool:
         if self._followed:

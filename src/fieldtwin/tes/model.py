@@ -250,12 +250,13 @@ class Tes:
 
     def answer_delay(self, link: Link) -> int:
         """Microseconds: the port's answer delay (§3.1.3) plus a ``late_answer`` fault."""
-        value = self.ram.params[_DELAY_KEYS[link]]
+        # the key by identity: a dict keyed by Link would hash it in Python per request
+        value = self.ram.params[_RS232_DELAY if link is Link.RS232 else _RS485_DELAY]
         assert isinstance(value, int)
         return value * MS + self.line_faults.late_us
 
     def count(self, link: Link, counter: Counter, now: int) -> None:
-        self.ram.counters[_LINK_KEYS[link]].bump(counter)
+        self.ram.counters["rs232" if link is Link.RS232 else "rs485"].bump(counter)
 
     def share_line_counts(self, link: Link, tally: LineTally) -> None:
         """The RTU line counts its line-wide counters (§6.2.3.2 01Ah-01Dh) once per frame
@@ -554,3 +555,4 @@ class Tes:
 
 _LINK_KEYS = {link: state.link_key(link) for link in Link}  # once, not per request
 _DELAY_KEYS = {link: f"{key}.answer_delay_ms" for link, key in _LINK_KEYS.items()}
+_RS232_DELAY, _RS485_DELAY = _DELAY_KEYS[Link.RS232], _DELAY_KEYS[Link.RS485]

@@ -52,11 +52,19 @@ class DigitalOutputs:
         return self.commanded(i, now)
 
     def mask(self, now: int) -> int:
-        """All outputs, bit i = output i."""
-        out = 0
-        for i in range(self.count):
-            if self.state(i, now):
-                out |= 1 << i
+        """All outputs, bit i = output i: the command's fixed bits at once, then each
+        blinking output, then the reflex overrides (what ``state`` gives each)."""
+        count, command = self.count, self.command
+        full = (1 << count) - 1
+        blink = self.blink_select & full
+        out = command & full & ~blink
+        if blink:
+            for i in range(count):
+                if (blink >> i) & 1 and self._blinking((command >> i) & 1, now):
+                    out |= 1 << i
+        for i, on in self.reflex.items():
+            if 0 <= i < count:
+                out = (out | 1 << i) if on else (out & ~(1 << i))
         return out
 
     def fall_back(self, or_masks: tuple[int, int], and_masks: tuple[int, int]) -> None:
