@@ -5,6 +5,8 @@ status lines (`--no-live`)."""
 from __future__ import annotations
 
 import io
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -64,3 +66,20 @@ def test_a_tes_only_plant_shows_its_values(tmp_path: Path, width: int) -> None:
         assert any(f"aout: a0={volts}" in line for line in lines if line.startswith("TES 3"))
     finally:
         plant.close()
+
+
+def test_fieldtwin_run_prints_the_values_in_its_status_lines(tmp_path: Path) -> None:
+    path = tmp_path / "tes.toml"
+    path.write_text(PLANT)
+    argv = ["run", str(path), "--speed", "max", "--duration", "2", "--no-live"]
+    done = subprocess.run(
+        [sys.executable, "-m", "fieldtwin", *argv, "--status-every", "1", "--no-control"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=True,
+    )
+    lines = done.stdout.splitlines()
+    assert any(line.startswith("TES 1 TES 32EST: on") and "in H'0009'" in line for line in lines)
+    assert any(line.startswith("TES 2 TES 8EA: on") and "a0=7.500V" in line for line in lines)
+    assert any(line.startswith("TES 3 TES 4SA: on") and "aout: a0=" in line for line in lines)
