@@ -773,24 +773,29 @@ function showReport(out, show, r) { // a finished exchange: V (or R) in hex, the
   show("text", text ? JSON.stringify(text) : "-");
 }
 
-const lastRequest = new Map(); // "endpoint slave" -> the newest request to that TES and its outcome
-function noteRequest(e) {
-  if (e.slave === null || e.slave === undefined || e.fault !== undefined) return;
-  const key = `${e.endpoint} ${e.slave}`;
+const lastRequest = new Map(); // "endpoint TES name" -> the newest request that TES met and its outcome
+function noteRequest(e) { // the outcome per TES is the event's own (the trace's `tes`), by TES name
+  if (e.fault !== undefined || e.error !== undefined) return;
   if (e.dir === "in") {
-    lastRequest.set(key, { t_s: e.t_s, what: [e.function_name, e.address !== undefined ? `@${e.address}` : "", e.count !== undefined ? `x${e.count}` : ""].filter(Boolean).join(" "), tes: e.tes || {}, rejected: e.rejected, reply: null });
-    if (lastRequest.size > 1000) lastRequest.delete(lastRequest.keys().next().value);
-  } else if (lastRequest.has(key)) {
-    lastRequest.get(key).reply = e.exception !== undefined ? `exception ${e.exception}` : "answered";
+    const what = [e.function_name, e.address !== undefined ? `@${e.address}` : "", e.count !== undefined ? `x${e.count}` : ""].filter(Boolean).join(" ");
+    for (const [name, outcome] of Object.entries(e.tes || {})) {
+      if (outcome === "not_addressed") continue; // a request for another slave is not this TES's
+      const key = `${e.endpoint} ${name}`;
+      lastRequest.delete(key); // re-inserted last: the map's order is the age, the oldest goes first
+      lastRequest.set(key, { t_s: e.t_s, what, outcome, reply: null });
+    }
+    if (e.rejected !== undefined) lastRequest.set(`${e.endpoint} #${e.slave}`, { t_s: e.t_s, what, outcome: `rejected: exception ${e.rejected}`, reply: null });
+    while (lastRequest.size > 1000) lastRequest.delete(lastRequest.keys().next().value);
+  } else if (e.from && lastRequest.has(`${e.endpoint} ${e.from}`)) {
+    lastRequest.get(`${e.endpoint} ${e.from}`).reply = e.exception !== undefined ? `exception ${e.exception}` : "answered";
   }
 }
-function lastRequestHtml(t) { // on a TES's front: the newest request for it and what it did with it
-  const r = lastRequest.get(`${t.endpoint} ${t.slave}`);
+function lastRequestHtml(t) { // on a TES's front: the newest request it met and what it did with it
+  const r = lastRequest.get(`${t.endpoint} ${t.kind} #${t.slave}`) || lastRequest.get(`${t.endpoint} #${t.slave}`);
   if (!r) return `<div class="lastreq muted" data-f="last-request">no request seen since the page opened</div>`;
-  const outcome = r.rejected !== undefined ? `rejected: exception ${r.rejected}` : r.tes[`${t.kind} #${t.slave}`] || "-";
-  const bad = !/^answers|^broadcast$/.test(outcome);
+  const bad = !/^answers|^broadcast$/.test(r.outcome);
   return `<div class="lastreq" data-f="last-request">last request <span class="muted">t = ${Number(r.t_s).toFixed(3)} s</span>
-    ${esc(r.what)} · <b class="${bad ? "alarm" : ""}" data-f="outcome">${esc(outcome)}</b>${r.reply ? ` · ${esc(r.reply)}` : ""}</div>`;
+    ${esc(r.what)} · <b class="${bad ? "alarm" : ""}" data-f="outcome">${esc(r.outcome)}</b>${r.reply ? ` · ${esc(r.reply)}` : ""}</div>`;
 }
 function outcomeText(e) { // "-> TES 8EA #2 no_answer": what each addressed TES did with a request
   if (e.dir !== "in" || !e.tes) return "";
