@@ -102,6 +102,8 @@ def _render(plant: Plant, endpoints: list[str], width: int, runner: Runner | Non
         parts.append(_family_table(family, devices, width))
         if width >= MEDIUM:  # each one's front (bit rows, words, readings) beneath
             parts.extend(_fronts(devices))
+        elif plant.plc is None:  # no rack to make room for: the values at every width
+            parts.extend(Text(values_line(d), "dim", overflow="fold") for d in devices)
     if width >= WIDE:
         parts.extend(_fronts([d for _, _, d in _module_devices(plant)], readings_only=True))
         parts.extend(tags_lines(plant))
@@ -254,10 +256,43 @@ def _fronts(devices: list[Device], readings_only: bool = False) -> list[Text]:
             )
         else:
             lines = panel.lines()
+        if not readings_only:
+            lines.extend(_analog_outputs(device.status()))
         if lines:
             head = f"{device.address.label} front:  "
             out.append(Text(head + "  ".join(lines), "dim", overflow="fold"))
     return out
+
+
+def _analog_outputs(status: DeviceStatus) -> list[str]:
+    """``["aout: a0=5.000V (H'4000')"]`` for a device with analog outputs, else ``[]``."""
+    shown = [f"{o.name}={o.text()}" for o in status.outputs if not isinstance(o.value, bool)]
+    return ["aout: " + " ".join(shown)] if shown else []
+
+
+def values_text(device: Device) -> str:
+    """``in H'0009'  out H'0000'  a0=7.351V a1=2.500V  aout: a0=5.000V (H'4000')``: a
+    device's inputs and outputs (bit rows in hex, bit 0 the lowest), its readings in
+    their unit and its analog outputs, in a few words; ``""`` for a device off."""
+    status = device.status()
+    if status.state == "off":
+        return ""
+    panel = device.panel()
+    parts = []
+    for row in panel.bits:
+        if row.bits:
+            value = sum(1 << i for i, on in enumerate(row.bits) if on)
+            parts.append(f"{row.name} H'{value:0{max(4, (len(row.bits) + 3) // 4)}X}'")
+    if panel.readings:
+        parts.append(" ".join(map(reading_text, panel.readings)))
+    parts.extend(_analog_outputs(status))
+    return "  ".join(parts)
+
+
+def values_line(device: Device) -> str:
+    """``TES 1 values:  in H'0009'  out H'0000'``: one device's values, for the live
+    view of a plant without a PLC below 104 columns."""
+    return f"{device.address.label} values:  {values_text(device) or 'off'}"
 
 
 def _module_devices(plant: Plant) -> list[tuple[int, int, Device]]:
@@ -335,11 +370,11 @@ def plain_status(plant: Plant) -> list[str]:
         )
     if plc is not None and plc.program is not None:
         lines.append(program_line(plc))
-    lines.extend(
-        device_line(d) + faults_note(d.status())
-        for devices in _families(plant).values()
-        for d in devices
-    )
+    for devices in _families(plant).values():
+        for d in devices:
+            values = values_text(d)
+            shown = f"  {values}" if values else ""
+            lines.append(device_line(d) + faults_note(d.status()) + shown)
     return lines
 
 

@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from fieldtwin.plant import load_plant
+from tests.tsx.dem24.helpers import unread_default_plant
 
 
-def test_every_logged_dem_message_is_an_event_with_its_time_stamp() -> None:
-    # the default plant at max speed: a DEM 2412 in slot 4 with live inputs
-    plant = load_plant(None, speed=None)
+def test_every_logged_dem_message_is_an_event_with_its_time_stamp(tmp_path: Path) -> None:
+    # the default plant at max speed: a DEM 2412 in slot 4 with live inputs (without the
+    # program's reading of the stack: tests/tsx/dem24/test_default_plant_stack.py has it)
+    plant = load_plant(unread_default_plant(tmp_path), speed=None)
     try:
         sub = plant.events.subscribe(["dem"])
         plant.plc.advance(59.0)  # the time is set at the first sync pulse, at 60 s
@@ -31,8 +35,10 @@ def test_every_logged_dem_message_is_an_event_with_its_time_stamp() -> None:
     assert times == sorted(times)
 
 
-def test_a_message_that_finds_the_stack_full_is_an_event_saying_it_was_lost() -> None:
-    plant = load_plant(None, speed=None)
+def test_a_message_that_finds_the_stack_full_is_an_event_saying_it_was_lost(
+    tmp_path: Path,
+) -> None:
+    plant = load_plant(unread_default_plant(tmp_path), speed=None)
     try:
         dem = next(d for d in plant.devices if str(d.address) == "4")
         logbook = dem.dem.logbook  # type: ignore[attr-defined]

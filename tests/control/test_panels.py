@@ -12,12 +12,14 @@ from fieldtwin.control.panels import LAST_MESSAGES, panels
 from fieldtwin.control.resources import Control
 from fieldtwin.plant import Plant, load_plant
 from fieldtwin.runtime.runner import Runner
-from tests.cli.test_cli import default_plant_copy
+from tests.tsx.dem24.helpers import unread_default_plant
 
 
 @pytest.fixture(scope="module")
 def state(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Plant, Control, Any]]:
-    plant = load_plant(default_plant_copy(tmp_path_factory.mktemp("panels")), speed=None)
+    # the default plant without its program's reading of the DEM stack: the stack the
+    # page looks at fills (tests/tsx/dem24/test_default_plant_stack.py: the reading)
+    plant = load_plant(unread_default_plant(tmp_path_factory.mktemp("panels")), speed=None)
     assert plant.plc is not None
     plant.plc.advance(80.0)
     control = Control(plant, Runner(plant.clock, None), plant.events)

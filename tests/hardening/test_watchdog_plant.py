@@ -110,7 +110,7 @@ def _sigterm_ends_it(running: Running) -> None:
 def test_a_program_looping_forever_from_the_plant_file(tmp_path: Path) -> None:
     plant = default_plant_copy(tmp_path)
     (tmp_path / "spin.pl7").write_text(SPIN)
-    plant.write_text(plant.read_text().replace('"aem811_tank.pl7"', '"spin.pl7"'))
+    plant.write_text(plant.read_text().replace('"default.pl7"', '"spin.pl7"'))  # its program
     with fieldtwin_run(plant) as running:
         with httpx.Client(base_url=running.url, timeout=ANSWER_S) as api:
             _faulted_yet_serving(running, api)

@@ -80,7 +80,7 @@ def test_the_recording_holds_the_session(recorded: tuple[Path, Path]) -> None:
         header = json.loads(file.readline())
     assert header["format"] == "fieldtwin-recording" and header["version"] == 1
     assert "TES 8EA" in header["plant"]["text"]
-    assert "PROGRAM" in header["plant"]["files"]["aem811_tank.pl7"].upper()
+    assert "PROGRAM" in header["plant"]["files"]["default.pl7"].upper()  # the default plant's
     kinds = {r[0] for r in _records(record)}
     assert {"bind", "accept", "data", "send", "call", "line", "ret", "result"} <= kinds
     assert {"object", "led", "end"} <= kinds

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from fieldtwin.clock import S
@@ -107,3 +108,17 @@ def synced(
     assert mod.timebase.ready
     read_all(plc)
     return plc, mod
+
+
+def unread_default_plant(tmp_path: Path) -> Path:
+    """The default plant as it was before its program read the DEM's message stack: the
+    AEM manual's tank program alone (aem811_tank.pl7), so nobody reads the stack and it
+    fills (for the tests of the DEM's stack and events on a whole plant)."""
+    from importlib import resources
+
+    text = resources.files("fieldtwin").joinpath("plants", "default.toml").read_text("utf-8")
+    assert 'program = "default.pl7"' in text
+    text = text.replace('program = "default.pl7"', 'program = "aem811_tank.pl7"')
+    path = tmp_path / "default-unread.toml"
+    path.write_text(text.replace("tcp://127.0.0.1:5020", "tcp://127.0.0.1:0"))
+    return path

@@ -142,6 +142,7 @@ function syncFaults(panel, dev) { // each fault button shows whether its fault i
 }
 
 function moduleHtml(m) {
+  if (!m.present) return removedModuleHtml(m);
   const head = `<div class="head"><b>slot ${esc(m.address)}</b> <span class="kind">${esc(m.kind)}</span>
     <span class="state" data-f="state">${esc(m.present ? m.state : "removed")}${m.mode ? " · " + esc(m.mode) : ""}</span></div>` + faultNote(m);
   const leds = `<div class="leds">${m.leds.map(([n, s]) => led(n, s)).join("")}
@@ -238,7 +239,7 @@ function tesHtml(t) {
   }
   const aout = analogOutputsHtml(t.analog_outputs);
   const wd = t.watchdog ? `<div>watchdog <b>${t.watchdog.seconds} s</b>${t.watchdog.word ? "" : " (off)"} · Wdg ${esc(t.watchdog.led)}</div>` : "";
-  return head + faultNote(t) + leds + io + analog + aout + wd + counters;
+  return head + faultNote(t) + leds + io + analog + aout + wd + lastRequestHtml(t) + counters;
 }
 
 function controlsFor(kind, dev, ident) {
@@ -316,7 +317,7 @@ function controlsFor(kind, dev, ident) {
       el("button", { type: "button", class: "insert", onclick: () => command("POST", "/plc/insert", { module: dev.address }, msg, "inserted") }, "insert module"),
     );
   }
-  box.append(actions, msg);
+  box.append(writeObjectRow(kind, dev, base, msg), actions, msg);
   return box;
 }
 
@@ -451,9 +452,11 @@ async function poll() {
     }
     link.textContent = `${RATE}/s`;
     link.className = "muted";
+    plantAnswers();
   } catch (exc) {
     link.textContent = `no answer: ${exc.message}`;
     link.className = "alarm";
+    plantSilent(exc);
   } finally {
     inFlight -= 1;
   }
@@ -513,10 +516,7 @@ function wireTextBlock() {
       if (!ex) return;
       show("state", ex.state);
       if (ex.done) {
-        const r = ex.result || {};
-        show("V", r.V ?? "-"); show("S", r.S ?? "-"); show("E", r.E ?? "-"); show("error", r.error || "-");
-        show("words", (r.words || []).map((w) => w.toString(16).toUpperCase().padStart(4, "0")).join(" ") || "-");
-        show("data", r.data || "-");
+        showReport(out, show, ex.result || {});
         return;
       }
       await new Promise((resolve) => setTimeout(resolve, 200));
@@ -745,8 +745,9 @@ function what(e) {
     if (e.address !== undefined) parts.push(`@${e.address}`);
     if (e.count !== undefined) parts.push(`x${e.count}`);
     if (e.exception !== undefined) parts.push(`exception ${e.exception}`);
+    parts.push(outcomeText(e));
     parts.push(e.hex || "");
-    return parts.join(" ");
+    return parts.filter(Boolean).join(" ");
   }
   if (e.kind === "serial") return `ch ${e.channel} ${JSON.stringify(e.text)}`;
   if (e.kind === "led") return `${e.led} ${e.was} -> ${e.state}`;
@@ -779,6 +780,7 @@ function connectEvents(delay = 1000) {
     for (const e of Array.isArray(batch) ? batch : [batch]) {
       stats.events += 1;
       if (e.kind === "serial") lastSerial.set(`${e.device} ${e.channel} ${e.dir}`, e.text);
+      if (e.kind === "modbus") noteRequest(e);
       traffic.events.push(e);
     }
     if (traffic.events.length > TRAFFIC_KEPT) traffic.events.splice(0, traffic.events.length - TRAFFIC_KEPT);
@@ -795,6 +797,108 @@ function wireTraffic() {
   hold.addEventListener("click", () => { traffic.held = !traffic.held; hold.textContent = traffic.held ? "follow" : "hold"; });
   document.getElementById("traffic-clear").addEventListener("click", () => { traffic.events = []; drawTraffic(); });
   setInterval(() => { if (traffic.dirty && !traffic.held) drawTraffic(); }, 500);
+}
+
+// --- views: a silent plant, a removed module, Text Block reports, requests, writes ---------------
+
+let silentSince = null; // wall-clock Date of the first unanswered poll; null while the plant answers
+function plantSilent(exc) { // the plant stopped or cannot be reached: nothing on the page is live
+  const banner = document.getElementById("plant-down");
+  if (silentSince === null) silentSince = new Date();
+  const seen = stats.state ? ` The values shown are the last seen, at t = ${stats.state.clock.t_s.toFixed(1)} s.` : "";
+  banner.textContent = `The plant does not answer (since ${silentSince.toLocaleTimeString()}: ${exc.message}): it stopped or cannot be reached.${seen}`;
+  banner.hidden = false;
+  BODY.classList.add("plant-down");
+  const mode = document.getElementById("plc-mode");
+  mode.textContent = "no answer";
+  mode.classList.add("stop");
+  stats.down = true;
+}
+function plantAnswers() {
+  if (silentSince === null) return;
+  silentSince = null;
+  document.getElementById("plant-down").hidden = true;
+  BODY.classList.remove("plant-down");
+  stats.down = false;
+}
+
+function removedModuleHtml(m) { // a slot without its module: no words, no measurements
+  const head = `<div class="head"><b>slot ${esc(m.address)}</b> <span class="kind">${esc(m.kind)}</span>
+    <span class="state" data-f="state">removed</span></div>`;
+  const leds = `<div class="leds">${m.leds.map(([n]) => led(n, "off")).join("")}
+    <span class="is">I,S <b data-f="is">${m.is}</b></span></div>`;
+  return head + leds + `<div class="removed muted" data-f="removed">module removed from slot ${esc(m.address)}:
+    no measurement, no register (I,S = 1 at the PLC); <b>insert module</b> in its controls puts it back</div>`;
+}
+
+function hexByte(v) { // H'7A' as the manuals write a report byte, H'0100' for a word
+  if (v === null || v === undefined) return "-";
+  const n = Number(v) & 0xffff;
+  return "H'" + n.toString(16).toUpperCase().padStart(n > 0xff ? 4 : 2, "0") + "'";
+}
+function printable(hex) { // the data as Latin-1 text, "·" for a byte that is not printable
+  const bytes = (String(hex || "").match(/../g) || []).map((b) => parseInt(b, 16));
+  if (!bytes.some((b) => b >= 0x20 && b < 0x7f)) return "";
+  return bytes.map((b) => (b >= 0x20 && b < 0x7f) || b >= 0xa0 ? String.fromCharCode(b) : "·").join("");
+}
+function showReport(out, show, r) { // a finished exchange: V (or R) in hex, the data in hex and as text
+  const name = r.R !== undefined ? "R" : "V";
+  out.querySelector('[data-f="V"]').previousElementSibling.textContent = name;
+  show("V", r[name] === undefined ? "-" : `${hexByte(r[name])} (${r[name]})`);
+  show("S", r.S ?? "-"); show("E", r.E ?? "-"); show("error", r.error || "-");
+  show("words", (r.words || []).map((w) => "H'" + w.toString(16).toUpperCase().padStart(4, "0") + "'").join(" ") || "-");
+  show("data", (String(r.data || "").match(/../g) || []).join(" ").toUpperCase() || "-");
+  const text = printable(r.data);
+  show("text", text ? JSON.stringify(text) : "-");
+}
+
+const lastRequest = new Map(); // "endpoint TES name" -> the newest request that TES met and its outcome
+function noteRequest(e) { // the outcome per TES is the event's own (the trace's `tes`), by TES name
+  if (e.fault !== undefined || e.error !== undefined) return;
+  if (e.dir === "in") {
+    const what = [e.function_name, e.address !== undefined ? `@${e.address}` : "", e.count !== undefined ? `x${e.count}` : ""].filter(Boolean).join(" ");
+    for (const [name, outcome] of Object.entries(e.tes || {})) {
+      if (outcome === "not_addressed") continue; // a request for another slave is not this TES's
+      const key = `${e.endpoint} ${name}`;
+      lastRequest.delete(key); // re-inserted last: the map's order is the age, the oldest goes first
+      lastRequest.set(key, { t_s: e.t_s, what, outcome, reply: null });
+    }
+    if (e.rejected !== undefined) lastRequest.set(`${e.endpoint} #${e.slave}`, { t_s: e.t_s, what, outcome: `rejected: exception ${e.rejected}`, reply: null });
+    while (lastRequest.size > 1000) lastRequest.delete(lastRequest.keys().next().value);
+  } else if (e.from && lastRequest.has(`${e.endpoint} ${e.from}`)) {
+    lastRequest.get(`${e.endpoint} ${e.from}`).reply = e.exception !== undefined ? `exception ${e.exception}` : "answered";
+  }
+}
+function lastRequestHtml(t) { // on a TES's front: the newest request it met and what it did with it
+  const r = lastRequest.get(`${t.endpoint} ${t.kind} #${t.slave}`) || lastRequest.get(`${t.endpoint} #${t.slave}`);
+  if (!r) return `<div class="lastreq muted" data-f="last-request">no request seen since the page opened</div>`;
+  const bad = !/^answers|^broadcast$/.test(r.outcome);
+  return `<div class="lastreq" data-f="last-request">last request <span class="muted">t = ${Number(r.t_s).toFixed(3)} s</span>
+    ${esc(r.what)} · <b class="${bad ? "alarm" : ""}" data-f="outcome">${esc(r.outcome)}</b>${r.reply ? ` · ${esc(r.reply)}` : ""}</div>`;
+}
+function outcomeText(e) { // "-> TES 8EA #2 no_answer": what each addressed TES did with a request
+  if (e.dir !== "in" || !e.tes) return "";
+  const told = Object.entries(e.tes).filter(([, what]) => what !== "not_addressed");
+  return told.length ? "→ " + told.map(([name, what]) => `${name} ${what}`).join("; ") : "→ no TES addressed";
+}
+
+function writeObjectRow(kind, dev, base, msg) { // write a PL7 object or a TES register, read it back
+  if (kind !== "tes" && kind !== "module") return "";
+  const example = kind === "tes" ? "H'014' or filter_0" : `OW${dev.address},1 or O${dev.address},0`;
+  const name = el("input", { class: "obj-name", size: "10", placeholder: example });
+  const value = el("input", { class: "obj-value", size: "7", placeholder: "H'00FF'" });
+  const shown = el("code", { class: "obj-read" });
+  const write = async () => {
+    const object = name.value.trim(), number = parseNumber(value.value);
+    if (!object) { showError(`write: name the ${kind === "tes" ? "register" : "object"} (${example})`, msg); return; }
+    if (Number.isNaN(number) || number < 0 || number > 0xffff) { showError(`write ${object}: ${value.value} is not a value 0..65535 (H'00FF', 0x00FF or 255)`, msg); return; }
+    const path = `${base}/objects/${encodeURIComponent(object)}`;
+    if (!await command("PUT", path, { value: number }, msg, `${object} written`)) return;
+    const back = await command("GET", `${path}?peek=true`, undefined, null, "");
+    if (back) shown.textContent = `${object} = ${back.hex}`;
+  };
+  return el("div", { class: "write-row" }, el("span", { class: "lbl" }, kind === "tes" ? "register" : "object"), name,
+    value, el("button", { type: "button", class: "write", onclick: write }, "write"), shown);
 }
 
 window.__fieldtwinTrends = trends;
