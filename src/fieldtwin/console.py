@@ -37,7 +37,7 @@ from fieldtwin.console_trace import ConsoleTrace
 from fieldtwin.devices.face import Device, DeviceStatus, Family, device_id
 from fieldtwin.errors import ConfigError, FieldtwinError
 from fieldtwin.live import device_line
-from fieldtwin.plant import Plant
+from fieldtwin.plant import Plant, outage
 from fieldtwin.runtime.door import Command
 from fieldtwin.signals.spec import file_in_spec
 from fieldtwin.tsx.addressing import parse_object
@@ -71,7 +71,7 @@ HELP = {
     "txt": "txt I [reset]             a Text Block's outputs; reset ends its exchange (TXTi,S = 1)",
     "tes": "tes [ENDPOINT] SLAVE read ADDR [N] | peek ADDR [N] | write ADDR VALUE"
     " | input I VALUE | signal I KIND key=value... | fault NAME on|off | faults | status | leds"
-    " | outputs | power-cycle",
+    " | outputs | power-cycle [SECONDS]",
     "trace": f"{TRACE_USAGE}  the traffic on the wire; each advance shows its own",
     "prog": PROG_HELP,
     "help": "help [COMMAND]",
@@ -458,9 +458,13 @@ class Console:
         ]
 
     def _tes_power_cycle(self, device: Device, head: str, rest: list[str]) -> list[str]:
-        device.fault("power_off").set()
-        device.fault("power_off").clear()
-        return [f"{head} power cycled"]
+        """``power-cycle [SECONDS]``: off and on at once, or on again SECONDS later (an
+        outage on the simulated clock: fieldtwin.plant.outage)."""
+        duration = parse_duration(rest[0]) if rest else None
+        back = outage.power_cycle(self.plant.clock, device, duration, head)
+        if back is None:
+            return [f"{head} power cycled"]
+        return [f"{head} power off until t = {back / S:.3f} s"]
 
     _TES_VERBS: ClassVar[
         dict[str, tuple[int, int, Callable[[Console, Device, str, list[str]], list[str]]]]
@@ -475,7 +479,7 @@ class Console:
         "status": (0, 0, lambda c, d, h, r: device_status(d)),
         "outputs": (0, 0, lambda c, d, h, r: list_outputs(d)),
         "leds": (0, 0, lambda c, d, h, r: [d.status().leds_text()]),
-        "power-cycle": (0, 0, lambda c, d, h, r: c._tes_power_cycle(d, h, r)),
+        "power-cycle": (0, 1, lambda c, d, h, r: c._tes_power_cycle(d, h, r)),
     }
 
     def _help(self, args: list[str]) -> list[str]:
