@@ -17,8 +17,9 @@ from fieldtwin.control.routers import (
     objects,
     plant,
     plc,
+    scenarios,
 )
 
-GROUPS = (plant, clock, devices, faults, objects, plc, console, dashboard)
+GROUPS = (plant, clock, devices, faults, objects, plc, scenarios, console, dashboard)
 
 __all__ = ["GROUPS"]
