@@ -118,6 +118,9 @@ class ScenarioResult:
 
 
 def _text(value: object) -> str:
+    """A value as a report shows it: true/false, numbers, texts quoted."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
     text = repr(value) if isinstance(value, str) else str(value)
     if isinstance(value, float):
         text = f"{value:.6g}"
@@ -391,7 +394,7 @@ def tag_value(plant: Plant, name: str) -> object:
 
 def _holds(expect: Expect, value: object) -> bool:
     if expect.between is not None:
-        if isinstance(value, bool) or not isinstance(value, int | float):
+        if not isinstance(value, int | float):  # a bit or a contact counts 0 or 1
             return False
         low, high = expect.between
         return low <= value <= high

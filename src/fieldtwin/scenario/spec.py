@@ -72,7 +72,9 @@ class Step:
             return f"exchange M={a['m']} C={a['c']}"
         if self.action == "signal":
             return f"signal {a['device']} {a['name']} {a['kind']}"
-        return f"{self.action} {a['device']} {a['name']} = {a['value']!r}"
+        value = a["value"]
+        shown = ("true" if value else "false") if isinstance(value, bool) else repr(value)
+        return f"{self.action} {a['device']} {a['name']} = {shown}"
 
 
 @dataclass(frozen=True, slots=True)
@@ -102,6 +104,8 @@ class Expect:
         if self.between is not None:
             low, high = self.between
             return f"between {low:g} and {high:g}"
+        if isinstance(self.equals, bool):
+            return "true" if self.equals else "false"
         return repr(self.equals)
 
 
