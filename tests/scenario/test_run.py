@@ -88,7 +88,14 @@ at_s = 1
 write = { device = "tes2", register = "0x000", value = 0 }
 [[step]]
 at_s = 1
-signal = { device = "tes2", name = "a1", kind = "ramp", start = 0.0, end = 10.0, t0_s = 1, duration_s = 10 }
+[step.signal]
+device = "tes2"
+name = "a1"
+kind = "ramp"
+start = 0.0
+end = 10.0
+t0_s = 1
+duration_s = 10
 [[step]]
 at_s = 1
 input = { device = "5", name = "1", value = "12mA" }
