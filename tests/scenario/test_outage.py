@@ -99,7 +99,9 @@ def test_a_poller_sees_a_2_s_power_cycle_as_2_s_of_timeouts_then_the_restart_bit
         back_t, back_value = polls[-1]
         assert back_value is not None, f"never answered again: {polls}"
         seen = back_t - silent[0]
-        assert outage_s - period_s - 0.1 <= seen <= outage_s + period_s + 0.1, polls
+        # ± one poll period, and the wall's jitter on a loaded machine
+        jitter_s = 0.25
+        assert outage_s - period_s - jitter_s <= seen <= outage_s + period_s + jitter_s, polls
         assert back_value & 0x1 == 0x1  # powered on again: the restart bit (TES §1)
     finally:
         master.close()  # type: ignore[no-untyped-call]
