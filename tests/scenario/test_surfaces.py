@@ -20,8 +20,10 @@ WALL_S = 120
 
 def fieldtwin_run(plant: Path, scenario: Path, *extra: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [sys.executable, "-m", "fieldtwin", "run", str(plant), "--scenario", str(scenario)]
-        + ["--speed", "max", "--no-live", "--control-port", "0", *extra],
+        [
+            *(sys.executable, "-m", "fieldtwin", "run", str(plant), "--scenario", str(scenario)),
+            *("--speed", "max", "--no-live", "--control-port", "0", *extra),
+        ],
         capture_output=True,
         text=True,
         timeout=WALL_S,
