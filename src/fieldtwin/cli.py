@@ -327,8 +327,10 @@ def _console(args: argparse.Namespace) -> int:
 
 def _console_lines(args: argparse.Namespace, plant: Plant) -> int:
     from fieldtwin.console import Console, run_script
+    from fieldtwin.control.scenarios import fallback_handlers
 
     console = Console(plant)
+    console.call = fallback_handlers(plant)["call"]  # a scenario's steps (docs/scenarios.md)
     if args.commands:
         return run_script(console, args.commands, sys.stdout, sys.stderr, "-c")
     if args.script:

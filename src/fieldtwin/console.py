@@ -38,7 +38,8 @@ from fieldtwin.devices.face import Device, DeviceStatus, Family, device_id
 from fieldtwin.errors import ConfigError, FieldtwinError
 from fieldtwin.live import device_line
 from fieldtwin.plant import Plant, outage
-from fieldtwin.runtime.door import Command
+from fieldtwin.runtime.door import Command, Handler
+from fieldtwin.scenario import ScenarioRun, read_scenario
 from fieldtwin.signals.spec import file_in_spec
 from fieldtwin.tsx.addressing import parse_object
 from fieldtwin.tsx.plc import Plc
@@ -73,6 +74,7 @@ HELP = {
     " | input I VALUE | signal I KIND key=value... | fault NAME on|off | faults | status | leds"
     " | outputs | power-cycle [SECONDS]",
     "trace": f"{TRACE_USAGE}  the traffic on the wire; each advance shows its own",
+    "scenario": "scenario FILE             run a scenario file (docs/scenarios.md) to its end",
     "prog": PROG_HELP,
     "help": "help [COMMAND]",
     "quit": "quit",
@@ -119,6 +121,9 @@ class Console:
         self.progress = progress
         self.files = files
         self.trace = ConsoleTrace(plant.events)
+        # what runs a scenario's control-API steps where nothing serves the plant's door
+        # (``fieldtwin console``: the CLI gives the handler of a Control made for it)
+        self.call: Handler | None = None
         self._commands: dict[str, Callable[[list[str]], list[str]]] = {
             "read": self._read,
             "write": self._write,
@@ -139,6 +144,7 @@ class Console:
             "txt": self._txt,
             "tes": self._tes,
             "trace": self.trace.command,
+            "scenario": self._scenario,
             "help": self._help,
         }
         self._prog = prog_command(lambda: self.plc, files=files)
@@ -302,6 +308,29 @@ class Console:
             if left > 0 and self.interrupted():
                 return [f"interrupted  {self._time()}", *self.trace.pending()]
         return [self._time(), *self.trace.pending()]
+
+    # --- scenarios (docs/scenarios.md) ---------------------------------------------------
+
+    def _scenario(self, args: list[str]) -> list[str]:
+        """``scenario FILE``: its steps and expectations from now, simulated time run to
+        its end; a line per outcome and the result (an error naming the first failure)."""
+        path = one_argument(args, "scenario FILE")
+        if not self.files:
+            raise ConfigError(
+                "scenario: reads a file, not allowed here (POST /scenarios takes the"
+                " scenario's text: docs/scenarios.md)"
+            )
+        run = ScenarioRun(self.plant, read_scenario(path), call=self.call, line=self.handle)
+        run.start()
+        try:
+            lines = self._advance([f"{(run.end_us - self.plant.clock.now) / S!r}"])
+        finally:
+            run.cancel()
+        result = run.result
+        if not result.passed:
+            shown = [*result.lines()[:-1], *lines]
+            raise ConfigError("\n".join([*shown, result.summary()]))
+        return [*result.lines()[:-1], *lines, result.summary()]
 
     # --- devices: one set of verbs for a module and a TES (the Device face) ----------
 

@@ -66,7 +66,7 @@ def test_a_wrong_expectation_fails_naming_the_step_object_values_and_time(
         run_scenario(plant, wrong)
     assert str(failed.value) == (
         "expect[5] at t = 26.000 s: tes2 LED Pwr expected 'on', actual 'off'"
-        " (after step[2] power_off tes2 5 s at_s = 25)"
+        " (after step[2] power_off tes2 5 s at t = 25.000 s)"
     )
     result = run_scenario(load_plant(None), wrong, check=False)
     assert not result["passed"] and result["done"]
@@ -174,3 +174,22 @@ def test_unknown_names_are_refused_before_anything_runs(plant: Plant, tmp_path: 
     with pytest.raises(Exception, match=r"step\[1\]\.input\.device: no device 'x' \(allowed: 4, 5"):
         run_scenario(plant, path)
     assert plant.clock.now == 0
+
+
+def test_the_console_runs_a_scenario_from_now(plant: Plant) -> None:
+    from fieldtwin.console import Console
+    from fieldtwin.control.scenarios import fallback_handlers
+
+    console = Console(plant)
+    console.call = fallback_handlers(plant)["call"]
+    console.execute("advance 10")
+    lines = console.execute(f"scenario {EXAMPLES / 'scada_alarm.toml'}")
+    assert lines[0] == "ok   t = 12.000 s  step[1]  write tes2 0x000 = 0"
+    assert lines[-1] == (
+        "scenario scada_alarm.toml: passed (4 steps, 5 expectations held, ended at t = 19.000 s)"
+    )
+    from fieldtwin.errors import ConfigError
+
+    api_console = Console(plant, files=False)
+    with pytest.raises(ConfigError, match=r"scenario: reads a file, not allowed here \(POST"):
+        api_console.execute(f"scenario {EXAMPLES / 'scada_alarm.toml'}")

@@ -52,7 +52,7 @@ def test_a_wrong_expectation_exits_1_naming_step_object_values_and_time(tmp_path
     assert done.returncode == 1, done.stdout + done.stderr
     message = (
         "expect[3] at t = 24.000 s: IW5,0,3 expected 0, actual 1"
-        " (after step[1] fault 5 open_3 on at_s = 20)"
+        " (after step[1] fault 5 open_3 on at t = 20.000 s)"
     )
     assert f"fieldtwin: scenario wrong.toml: FAILED: {message}" in done.stderr
     assert f"FAIL {message}" in done.stdout

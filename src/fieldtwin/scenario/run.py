@@ -146,7 +146,8 @@ class ScenarioRun:
         self.result = ScenarioResult(scenario.name, scenario.title, 0.0, scenario.end_s)
         self._handles: list[Handle] = []
         self._start_us = 0
-        self._last_step: Step | None = None
+        self._last_step: Step | None = None  # the last step run, and when (s)
+        self._last_step_t = 0.0
         self.check()
 
     # --- before it starts: every name it uses exists ----------------------------------
@@ -260,7 +261,7 @@ class ScenarioRun:
         return Command.line(str(a["line"]))
 
     def _step(self, step: Step, now: int) -> None:
-        self._last_step = step
+        self._last_step, self._last_step_t = step, now / S
         try:
             self._dispatch(self._command(step))
         except FieldtwinError as exc:
@@ -289,9 +290,9 @@ class ScenarioRun:
             error = ""
         ok = not error and _holds(expect, value)
         actual = error or _text(value)
-        after = self._last_step
+        after, after_t = self._last_step, self._last_step_t
         context = (
-            f" (after step[{after.index}] {after.text()} at_s = {after.at_s:g})"
+            f" (after step[{after.index}] {after.text()} at t = {after_t:.3f} s)"
             if after is not None
             else ""
         )
