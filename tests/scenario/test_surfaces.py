@@ -104,7 +104,7 @@ def test_post_scenarios_refuses_a_bad_text_naming_the_field(running: RunningPlan
                 "/scenarios",
                 {"text": "[[expect]]\nat_s = 1\nobject = 'W0'\n", "name": "mine.toml"},
             )
-        assert bad.value.status == 400
+        assert bad.value.status == 409
         assert "mine.toml: expect[1]: give either equals or between" in str(bad.value)
         with pytest.raises(ControlError) as missing:
             api.request("GET", "/scenarios/9999")

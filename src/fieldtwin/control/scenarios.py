@@ -62,9 +62,12 @@ class ScenarioRuns:
         running = sum(1 for r in self._runs.values() if not r.result.done)
         if running >= MAX_RUNNING:
             raise Conflict(f"{running} scenarios are running (allowed at most {MAX_RUNNING})")
-        scenario = parse_scenario(text, name)
         handlers = fallback_handlers(self.plant)
-        run = ScenarioRun(self.plant, scenario, call=handlers[CALL], line=handlers[LINE])
+        try:  # a text that fits the body's schema, not the scenario format or this plant
+            scenario = parse_scenario(text, name)
+            run = ScenarioRun(self.plant, scenario, call=handlers[CALL], line=handlers[LINE])
+        except ConfigError as exc:
+            raise Conflict(str(exc)) from None
         run.start()
         ident = self._next
         self._next += 1

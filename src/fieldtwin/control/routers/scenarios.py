@@ -12,13 +12,16 @@ from fieldtwin.control.replies import Reply
 from fieldtwin.control.routers.common import REPLY, Hop
 from fieldtwin.control.scenarios import ScenarioRuns
 from fieldtwin.control.schemas import Closed
-from fieldtwin.scenario.spec import MAX_FILE_BYTES
+
+# a scenario's text in a request: within the API's body limit (64 KiB: guards.MAX_BODY)
+MAX_TEXT = 60_000
 
 
 class ScenarioBody(Closed):
-    """A scenario file's text (TOML, docs/scenarios.md) and the name its errors give."""
+    """A scenario file's text (TOML, docs/scenarios.md, at most 60000 characters here) and
+    the name its errors give."""
 
-    text: Annotated[str, Field(max_length=MAX_FILE_BYTES)]
+    text: Annotated[str, Field(max_length=MAX_TEXT)]
     name: Annotated[str, Field(min_length=1, max_length=128)] = "scenario"
 
 
@@ -47,7 +50,18 @@ def router(hop: Hop) -> APIRouter:
     runs = ScenarioRuns(hop.control.plant)
     api = APIRouter(prefix="/scenarios", tags=["scenarios"])
 
-    @api.post("", status_code=202, summary="start a scenario now (its TOML text)", **REPLY)
+    @api.post(
+        "",
+        status_code=202,
+        summary="start a scenario now (its TOML text)",
+        responses={
+            409: {
+                "description": "not a scenario of this plant (the message names the table and"
+                " the field), or too many running"
+            },
+        },
+        **REPLY,
+    )
     async def start(body: ScenarioBody) -> ScenarioJson:
         return ScenarioJson.model_validate(await hop.run(lambda: runs.start(body.text, body.name)))
 
@@ -55,7 +69,12 @@ def router(hop: Hop) -> APIRouter:
     async def listing() -> list[ScenarioItem]:
         return [ScenarioItem.model_validate(one) for one in await hop.run(runs.list)]
 
-    @api.get("/{ident}", summary="a scenario: its outcomes so far, its result once done", **REPLY)
+    @api.get(
+        "/{ident}",
+        summary="a scenario: its outcomes so far, its result once done",
+        responses={404: {"description": "no such scenario (the last 64 are kept)"}},
+        **REPLY,
+    )
     async def status(ident: int) -> ScenarioJson:
         return ScenarioJson.model_validate(await hop.run(lambda: runs.json(ident)))
 
