@@ -135,6 +135,7 @@ WINDOWS = (
     "fieldtwin.live",
     "fieldtwin.plant",
     "fieldtwin.replay",
+    "fieldtwin.scenario",
     "fieldtwin.session",
 )
 KIND_MODULES = (

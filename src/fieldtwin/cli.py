@@ -65,7 +65,8 @@ def _parser() -> argparse.ArgumentParser:
         epilog="examples:\n"
         "  fieldtwin run                                  # the embedded default plant, x1\n"
         "  fieldtwin run examples/tes.toml --speed 10\n"
-        "  fieldtwin run --speed max --duration 60 --no-live --status-every 10",
+        "  fieldtwin run --speed max --duration 60 --no-live --status-every 10\n"
+        "  fieldtwin run --scenario examples/scenarios/fault_drill.toml --speed max --no-live",
     )
     run.add_argument("plant", nargs="?", help="plant file (TOML); default: the embedded plant")
     run.add_argument(
@@ -87,6 +88,12 @@ def _parser() -> argparse.ArgumentParser:
         "--record",
         metavar="FILE",
         help="record the session for `fieldtwin replay` (docs/record.md)",
+    )
+    run.add_argument(
+        "--scenario",
+        metavar="FILE",
+        help="run this scenario (TOML, docs/scenarios.md) from t = 0 and stop after it:"
+        " exit 0 when every expectation held, 1 naming the first that did not",
     )
     _control_options(run)
     con = sub.add_parser(
@@ -302,6 +309,7 @@ def _run(args: argparse.Namespace) -> int:
         pcap=args.pcap,
         record=args.record,
         control=None if args.no_control else control,
+        scenario=args.scenario,
     )
     return run(options)
 
@@ -319,8 +327,10 @@ def _console(args: argparse.Namespace) -> int:
 
 def _console_lines(args: argparse.Namespace, plant: Plant) -> int:
     from fieldtwin.console import Console, run_script
+    from fieldtwin.control.scenarios import fallback_handlers
 
     console = Console(plant)
+    console.call = fallback_handlers(plant)["call"]  # a scenario's steps (docs/scenarios.md)
     if args.commands:
         return run_script(console, args.commands, sys.stdout, sys.stderr, "-c")
     if args.script:

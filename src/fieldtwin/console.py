@@ -38,9 +38,10 @@ from fieldtwin.console_trace import ConsoleTrace
 from fieldtwin.devices.face import Device, DeviceStatus, Family, device_id
 from fieldtwin.errors import ConfigError, FieldtwinError
 from fieldtwin.live import device_line
-from fieldtwin.plant import Plant
+from fieldtwin.plant import Plant, outage
 from fieldtwin.plant.tags import Tag, raw_value, raw_word, tag_value
-from fieldtwin.runtime.door import Command
+from fieldtwin.runtime.door import Command, Handler
+from fieldtwin.scenario import ScenarioRun, read_scenario
 from fieldtwin.signals.spec import file_in_spec
 from fieldtwin.tsx.addressing import parse_object
 from fieldtwin.tsx.plc import Plc
@@ -73,8 +74,9 @@ HELP = {
     "txt": "txt I [reset]             a Text Block's outputs; reset ends its exchange (TXTi,S = 1)",
     "tes": "tes [ENDPOINT] SLAVE read ADDR [N] | peek ADDR [N] | write ADDR VALUE"
     " | input I VALUE | signal I KIND key=value... | fault NAME on|off | faults | status | leds"
-    " | outputs | power-cycle",
+    " | outputs | power-cycle [SECONDS]",
     "trace": f"{TRACE_USAGE}  the traffic on the wire; each advance shows its own",
+    "scenario": "scenario FILE             run a scenario file (docs/scenarios.md) to its end",
     "prog": PROG_HELP,
     "help": "help [COMMAND]",
     "quit": "quit",
@@ -121,6 +123,9 @@ class Console:
         self.progress = progress
         self.files = files
         self.trace = ConsoleTrace(plant.events)
+        # what runs a scenario's control-API steps where nothing serves the plant's door
+        # (``fieldtwin console``: the CLI gives the handler of a Control made for it)
+        self.call: Handler | None = None
         self._commands: dict[str, Callable[[list[str]], list[str]]] = {
             "read": self._read,
             "write": self._write,
@@ -141,6 +146,7 @@ class Console:
             "txt": self._txt,
             "tes": self._tes,
             "trace": self.trace.command,
+            "scenario": self._scenario,
             "help": self._help,
         }
         self._prog = prog_command(lambda: self.plc, files=files)
@@ -349,6 +355,29 @@ class Console:
                 return [f"interrupted  {self._time()}", *self.trace.pending()]
         return [self._time(), *self.trace.pending()]
 
+    # --- scenarios (docs/scenarios.md) ---------------------------------------------------
+
+    def _scenario(self, args: list[str]) -> list[str]:
+        """``scenario FILE``: its steps and expectations from now, simulated time run to
+        its end; a line per outcome and the result (an error naming the first failure)."""
+        path = one_argument(args, "scenario FILE")
+        if not self.files:
+            raise ConfigError(
+                "scenario: reads a file, not allowed here (POST /scenarios takes the"
+                " scenario's text: docs/scenarios.md)"
+            )
+        run = ScenarioRun(self.plant, read_scenario(path), call=self.call, line=self.handle)
+        run.start()
+        try:
+            lines = self._advance([f"{(run.end_us - self.plant.clock.now) / S!r}"])
+        finally:
+            run.cancel()
+        result = run.result
+        if not result.passed:
+            shown = [*result.lines()[:-1], *lines]
+            raise ConfigError("\n".join([*shown, result.summary()]))
+        return [*result.lines()[:-1], *lines, result.summary()]
+
     # --- devices: one set of verbs for a module and a TES (the Device face) ----------
 
     def _module(self, token: str) -> Device:
@@ -525,9 +554,13 @@ class Console:
         ]
 
     def _tes_power_cycle(self, device: Device, head: str, rest: list[str]) -> list[str]:
-        device.fault("power_off").set()
-        device.fault("power_off").clear()
-        return [f"{head} power cycled"]
+        """``power-cycle [SECONDS]``: off and on at once, or on again SECONDS later (an
+        outage on the simulated clock: fieldtwin.plant.outage)."""
+        duration = parse_duration(rest[0]) if rest else None
+        back = outage.power_cycle(self.plant.clock, device, duration, head)
+        if back is None:
+            return [f"{head} power cycled"]
+        return [f"{head} power off until t = {back / S:.3f} s"]
 
     _TES_VERBS: ClassVar[
         dict[str, tuple[int, int, Callable[[Console, Device, str, list[str]], list[str]]]]
@@ -542,7 +575,7 @@ class Console:
         "status": (0, 0, lambda c, d, h, r: device_status(d)),
         "outputs": (0, 0, lambda c, d, h, r: list_outputs(d)),
         "leds": (0, 0, lambda c, d, h, r: [d.status().leds_text()]),
-        "power-cycle": (0, 0, lambda c, d, h, r: c._tes_power_cycle(d, h, r)),
+        "power-cycle": (0, 1, lambda c, d, h, r: c._tes_power_cycle(d, h, r)),
     }
 
     def _help(self, args: list[str]) -> list[str]:

@@ -42,6 +42,7 @@ if TYPE_CHECKING:
 
     from fieldtwin.control.launch import Launched
     from fieldtwin.runtime.record import Recorder
+    from fieldtwin.scenario import Scenario, ScenarioRun
 
 # The control API's commands that are recorded (docs/record.md): the door's CALL commands.
 CONTROL_COMMANDS = COMMANDS
@@ -76,6 +77,7 @@ class RunOptions:
     pcap: str | None = None
     record: str | None = None
     control: ControlOptions | None = field(default_factory=ControlOptions)  # None: no API
+    scenario: str | None = None  # a scenario file: run it from t = 0, end after it
 
 
 class Session:
@@ -202,6 +204,24 @@ class Session:
         self.control = launched  # the recorder sees its commands at the plant's door
         return launched
 
+    def start_scenario(self, scenario: Scenario) -> ScenarioRun:
+        """``--scenario``: its steps and expectations from now; the run stops at its end."""
+        from fieldtwin.control.scenarios import fallback_handlers
+        from fieldtwin.scenario import ScenarioRun
+
+        runner = self.runner
+        assert runner is not None
+        handlers = fallback_handlers(self.plant, runner)
+        run = ScenarioRun(
+            self.plant,
+            scenario,
+            call=handlers["call"],
+            line=handlers["line"],
+            on_end=lambda result: runner.stop(),
+        )
+        self.push(run.cancel)
+        return run.start()
+
     def announce(self) -> None:
         """The listening lines, warnings and notes, the `running` line, the API's lines."""
         from fieldtwin.runtime.exposure import warnings_for
@@ -271,9 +291,15 @@ def open_run(options: RunOptions) -> Session:
 
 
 def run(options: RunOptions) -> int:
-    """``fieldtwin run``: open, announce, run until stopped, close; exit status 0."""
+    """``fieldtwin run``: open, announce, run until stopped, close; exit status 0 (with
+    ``--scenario``: 0 when every expectation held, else 1 naming the first that did not)."""
+    from fieldtwin.scenario import read_scenario
+
+    scenario = read_scenario(options.scenario) if options.scenario else None  # before any port
     session = open_run(options)
     try:
+        if scenario is not None:
+            scenario_run = session.start_scenario(scenario)
         session.announce()
         # the plant lives as long as the process: the cyclic collector need not walk its
         # objects again and again (1000 TES: half the time of an edge; docs/decisions.md)
@@ -291,7 +317,15 @@ def run(options: RunOptions) -> int:
     if final:
         _say("\n".join(final))
     _say(f"stopped at t = {session.plant.clock.now / S:.3f} s")
-    return 0
+    if scenario is None:
+        return 0
+    result = scenario_run.result
+    _say("\n".join(result.lines()))
+    if not result.done:
+        _say(f"fieldtwin: scenario {scenario.name}: stopped before its end", err=True)
+    elif not result.passed:
+        _say(f"fieldtwin: {result.summary()}", err=True)
+    return 0 if result.passed else 1
 
 
 def writable(option: str, path: str) -> None:

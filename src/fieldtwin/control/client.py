@@ -226,10 +226,12 @@ class Client:
         path = f"/devices/{_name(device)}/objects/{_name(name)}"
         return int(self._answer(replies.ObjectValue, "PUT", path, {"value": value})["value"])
 
-    def power_cycle(self, device: str) -> dict[str, Any]:
-        return dict(
-            self._answer(replies.PowerCycled, "POST", f"/devices/{_name(device)}/power-cycle")
-        )
+    def power_cycle(self, device: str, seconds: float | None = None) -> dict[str, Any]:
+        """24 V off and on again; with ``seconds``, on again that many simulated seconds later."""
+        path = f"/devices/{_name(device)}/power-cycle"
+        if not seconds:
+            return dict(self._answer(replies.PowerCycled, "POST", path))
+        return dict(self._answer(replies.PowerCycled, "POST", path, {"seconds": seconds}))
 
     # --- the PLC -------------------------------------------------------------------
 

@@ -153,7 +153,8 @@ class ObjectValue(Reply):
 
 class PowerCycled(Reply):
     device: str
-    power: str
+    power: str  # "cycled" (at once), or "off" until back_at_s (an outage that lasts)
+    back_at_s: float | None = None
 
 
 # --- the PLC -------------------------------------------------------------------------

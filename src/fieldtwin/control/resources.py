@@ -30,7 +30,7 @@ from fieldtwin.devices.face import (
     device_id,
 )
 from fieldtwin.errors import ConfigError, FieldtwinError
-from fieldtwin.plant import Plant
+from fieldtwin.plant import Plant, outage
 from fieldtwin.runtime.door import Command
 from fieldtwin.runtime.events import EventBus
 from fieldtwin.runtime.runner import Runner
@@ -252,17 +252,22 @@ class Control:
         now = objects.peek(name)
         return {"device": ident, "object": name, "value": now, "hex": format_hex(now)}
 
-    def power_cycle(self, ident: str) -> Json:
+    def power_cycle(self, ident: str, seconds: float | None = None) -> Json:
+        """24 V off and on again; with ``seconds``, on again that many simulated seconds
+        later (an outage that lasts: fieldtwin.plant.outage)."""
         device = self.device(ident)
         if device.family is not Family.TES:
             raise ConfigError(
                 f"{device.kind} {device.address}: power-cycle is for a TES;"
                 " a module loses its supply with the PLC's power break"
             )
-        fault = device.fault("power_off")
-        fault.set(True)
-        fault.clear()
-        return {"device": ident, "power": "cycled"}
+        try:
+            back = outage.power_cycle(self.plant.clock, device, seconds, ident)
+        except outage.OutageBusy as exc:
+            raise Conflict(str(exc)) from None
+        if back is None:
+            return {"device": ident, "power": "cycled"}
+        return {"device": ident, "power": "off", "back_at_s": back / S}
 
     # --- the PLC: Text Blocks, power, slots ---------------------------------------------
 

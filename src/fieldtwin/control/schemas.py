@@ -91,6 +91,12 @@ class PowerBreakBody(ModeBody):
     seconds: Annotated[float, Field(ge=0, le=3600, allow_inf_nan=False)]
 
 
+class PowerCycleBody(Closed):
+    """A TES's outage: off now, on again ``seconds`` later (0: at once)."""
+
+    seconds: Annotated[float, Field(ge=0, le=3600, allow_inf_nan=False)] = 0.0
+
+
 class ModuleBody(Closed):
     module: Annotated[str, Field(pattern=r"^\d{1,2}$", description="5 (rack 0) or 23")]
 

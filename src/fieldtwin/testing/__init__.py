@@ -15,6 +15,7 @@ from fieldtwin.testing.helpers import (
     run_until,
 )
 from fieldtwin.testing.process import Endpoint, PlantStartError, RunningPlant, start_plant
+from fieldtwin.testing.scenarios import run_scenario
 
 __all__ = [
     "Endpoint",
@@ -25,6 +26,7 @@ __all__ = [
     "assert_leds",
     "assert_object",
     "assert_state",
+    "run_scenario",
     "run_until",
     "start_plant",
 ]

@@ -40,6 +40,8 @@ from fieldtwin.testing.targets import time_text
 START_S = 60.0  # the plant prints its control line within this (wall) bound
 STOP_S = 15.0  # SIGTERM, then SIGKILL after this
 POLL_S = 0.02  # run_until's poll period (wall)
+DEFAULT_SCENARIO_WALL_S = 120.0  # a scenario on a running plant: the most it is awaited (wall)
+SCENARIO_POLL_S = 0.1
 MAX_LINES = 5000  # output lines kept per stream (the last ones)
 _TCP = re.compile(r"^((?:rtu\+)?tcp://)(\[[^\]]*\]|[^:/]+):(\d+)$")
 _LISTENING = re.compile(
@@ -392,6 +394,24 @@ class RunningPlant:
 
     def target(self) -> RunningTarget:
         return RunningTarget(self)
+
+    # --- scenarios (docs/scenarios.md) ------------------------------------------
+
+    def scenario(self, path: Path, wall_s: float = DEFAULT_SCENARIO_WALL_S) -> dict[str, Any]:
+        """Start the scenario file ``path`` (``POST /scenarios``) and await its end, at most
+        ``wall_s`` wall seconds; its result (``done`` false if it did not end by then)."""
+        try:
+            text = Path(path).read_text("utf-8")
+        except OSError as exc:
+            raise ConfigError(f"{path}: cannot read the scenario file ({exc.strerror})") from None
+        api = self.api
+        started = api.request("POST", "/scenarios", {"text": text, "name": Path(path).name})
+        deadline = time.monotonic() + wall_s
+        while True:
+            result: dict[str, Any] = api.request("GET", f"/scenarios/{started['id']}")
+            if result["done"] or time.monotonic() > deadline:
+                return result
+            time.sleep(SCENARIO_POLL_S)
 
     # --- time (the helpers of fieldtwin.testing, bound to this plant) ------------
 

@@ -17,9 +17,10 @@ from fieldtwin.control.routers import (
     objects,
     plant,
     plc,
+    scenarios,
     tags,
 )
 
-GROUPS = (plant, clock, devices, faults, objects, plc, console, dashboard, tags)
+GROUPS = (plant, clock, devices, faults, objects, plc, scenarios, console, dashboard, tags)
 
 __all__ = ["GROUPS"]

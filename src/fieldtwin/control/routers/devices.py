@@ -6,7 +6,7 @@ from fastapi import APIRouter
 
 from fieldtwin.control.replies import InputJson, InputSet, Leds, OutputJson, PowerCycled, StatusJson
 from fieldtwin.control.routers.common import REPLY, Hop
-from fieldtwin.control.schemas import InputBody
+from fieldtwin.control.schemas import InputBody, PowerCycleBody
 
 
 def router(hop: Hop) -> APIRouter:
@@ -45,9 +45,16 @@ def router(hop: Hop) -> APIRouter:
         found = await hop.read(("outputs", ident), lambda: c.outputs(ident))
         return [OutputJson.model_validate(one) for one in found]
 
-    @api.post("/power-cycle", summary="a TES: 24 V off and on again", **REPLY)
-    async def power_cycle(ident: str) -> PowerCycled:
-        return PowerCycled.model_validate(await hop.do("power_cycle", ident))
+    @api.post(
+        "/power-cycle",
+        summary="a TES: 24 V off and on again, at once or after an outage of some seconds",
+        responses={409: {"description": "an outage of this TES is in progress"}},
+        **REPLY,
+    )
+    async def power_cycle(ident: str, body: PowerCycleBody | None = None) -> PowerCycled:
+        if body is None or not body.seconds:
+            return PowerCycled.model_validate(await hop.do("power_cycle", ident))
+        return PowerCycled.model_validate(await hop.do("power_cycle", ident, body.seconds))
 
     return api
 

@@ -54,6 +54,19 @@ function showOk(text, where) {
   errorBox.hidden = true;
   if (where) { where.textContent = text; where.className = "msg ok"; }
 }
+// A TES's power cycle: at once, or an outage of some simulated seconds (POST .../power-cycle
+// {"seconds": S}, 0..3600); during it the TES does not answer and its LEDs are off.
+function powerCycleControls(base, msg) {
+  const seconds = el("input", { class: "args outage", type: "number", min: "0", max: "3600", step: "any", size: "5", placeholder: "off s", title: "simulated seconds off (empty: off and on at once)" });
+  const button = el("button", { type: "button", class: "power-cycle" }, "power cycle");
+  button.addEventListener("click", () => {
+    const s = seconds.value.trim() === "" ? 0 : Number(seconds.value);
+    if (!(s >= 0 && s <= 3600)) { showError(`power cycle: ${seconds.value} not allowed (0 to 3600 simulated seconds)`, msg); return; }
+    command("POST", `${base}/power-cycle`, s ? { seconds: s } : undefined, msg, s ? `power off for ${s} s` : "power cycled");
+  });
+  return [button, seconds];
+}
+
 async function command(method, path, body, where, okText) {
   try {
     const data = await api(method, path, body);
@@ -310,7 +323,7 @@ function controlsFor(kind, dev, ident) {
   box.append(faults);
   const actions = el("div", { class: "actions" });
   if (kind === "tes") {
-    actions.append(el("button", { type: "button", onclick: () => command("POST", `${base}/power-cycle`, undefined, msg, "power cycled") }, "power cycle"));
+    actions.append(...powerCycleControls(base, msg));
   } else {
     actions.append(
       el("button", { type: "button", class: "remove", onclick: () => command("POST", "/plc/remove", { module: dev.address }, msg, "removed") }, "remove module"),
