@@ -9,8 +9,12 @@ a subscriber (issue 11), and the API against references (issue 26).
   register (``POST /restapi/registers``; target: PUT >= 1x; it needs aiohttp, the
   ``pymodbus[simulator]`` extra: skipped without).  The load is wrk (Debian's ``wrk``)
   when on PATH, else as many client processes as connections (httpx, closed loop);
-  each figure is the best of ROUNDS rounds alternated between the servers (the
-  machine's load drifts during a run);
+  each figure is the median of ROUNDS rounds alternated between the servers (the
+  machine's load drifts during a run), beside each server's CPU time per request
+  (its process's user + system time over the requests wrk counted: Linux), which a
+  machine shared with other jobs disturbs far less than requests per second; the
+  load average is printed before and after.  Every server runs uvicorn with the
+  same settings (its HTTP parser: httptools when installed, else h11: printed);
 * a closed loop of one ``httpx`` client (one connection) on the same two requests;
 * event stream: events published on an EventBus as fast as one thread can, carried
   by the real WebSocket endpoint (uvicorn in a thread) to a websockets client:
@@ -18,7 +22,8 @@ a subscriber (issue 11), and the API against references (issue 26).
 * Modbus TCP: a pymodbus master reading 10 holding registers of TES 1 in a closed
   loop, without and then with a subscriber of every event attached (ratio printed).
 
-Run:  .venv/bin/python benchmarks/control.py [seconds per measure]
+Run:  .venv/bin/python benchmarks/control.py [seconds per measure] [--references]
+(``--references``: only the API against the references.)
 """
 
 from __future__ import annotations
@@ -30,6 +35,7 @@ import os
 import re
 import shutil
 import socket
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -47,7 +53,7 @@ sys.path.insert(0, str(ROOT))
 from tests.control.plantproc import default_plant_copy, fieldtwin_run  # noqa: E402
 
 CONNECTIONS = 8  # the load's connections (wrk: on one thread; else one process each)
-ROUNDS = 2
+ROUNDS = 3
 GET_TARGET, PUT_TARGET = 0.8, 1.0
 INPUT_BODY = {"value": True}
 START_S = 30.0
@@ -111,8 +117,9 @@ def free_port() -> int:
 
 
 @contextmanager
-def served(args: list[str], port: int) -> Iterator[str]:
-    """``benchmarks/control.py ARGS`` in a process of its own, until its port answers."""
+def served(args: list[str], port: int) -> Iterator[tuple[str, int]]:
+    """``benchmarks/control.py ARGS`` in a process of its own, until its port answers:
+    its URL and process id."""
     proc = subprocess.Popen(
         [sys.executable, __file__, *args], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
     )
@@ -127,7 +134,7 @@ def served(args: list[str], port: int) -> Iterator[str]:
                     err = proc.stderr.read().decode() if proc.stderr else ""
                     raise RuntimeError(f"{args[0]} did not start: {err[-2000:]}") from None
                 time.sleep(0.05)
-        yield f"http://127.0.0.1:{port}"
+        yield f"http://127.0.0.1:{port}", proc.pid
     finally:
         proc.terminate()
         try:
@@ -140,8 +147,23 @@ def served(args: list[str], port: int) -> Iterator[str]:
 # --- the load ---------------------------------------------------------------------------
 
 
-def wrk_rate(url: str, method: str, body: object, seconds: float) -> float:
-    """Requests/s by wrk (every answer must be a 2xx: asserted)."""
+def cpu_s(pid: int) -> float | None:
+    """A process's user + system CPU seconds so far (Linux's /proc); None elsewhere."""
+    try:
+        with open(f"/proc/{pid}/stat") as stat:
+            fields = stat.read().rsplit(")", 1)[1].split()
+    except OSError:
+        return None
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def http_parser() -> str:
+    """The HTTP implementation uvicorn's default ("auto") takes here."""
+    return "httptools" if importlib.util.find_spec("httptools") else "h11"
+
+
+def wrk_rate(url: str, method: str, body: object, seconds: float) -> tuple[float, int]:
+    """Requests/s by wrk, and how many requests (every answer must be a 2xx: asserted)."""
     with tempfile.NamedTemporaryFile("w", suffix=".lua", delete=False) as script:
         script.write(f'wrk.method = "{method}"\n')
         if body is not None:
@@ -167,8 +189,9 @@ def wrk_rate(url: str, method: str, body: object, seconds: float) -> float:
         os.unlink(script.name)
     assert "Non-2xx" not in done.stdout and "Socket errors" not in done.stdout, done.stdout
     found = re.search(r"Requests/sec:\s+([\d.]+)", done.stdout)
-    assert found, done.stdout
-    return float(found.group(1))
+    count = re.search(r"(\d+) requests in", done.stdout)
+    assert found and count, done.stdout
+    return float(found.group(1)), int(count.group(1))
 
 
 def _client_loop(url: str, method: str, body: object, seconds: float, out: object) -> None:
@@ -183,7 +206,7 @@ def _client_loop(url: str, method: str, body: object, seconds: float, out: objec
     out.put(count)  # type: ignore[attr-defined]
 
 
-def processes_rate(url: str, method: str, body: object, seconds: float) -> float:
+def processes_rate(url: str, method: str, body: object, seconds: float) -> tuple[float, int]:
     """Requests/s by CONNECTIONS client processes, each a closed loop on its connection."""
     context = multiprocessing.get_context("spawn")
     counts = context.Queue()
@@ -196,13 +219,24 @@ def processes_rate(url: str, method: str, body: object, seconds: float) -> float
     total = sum(counts.get(timeout=seconds + 60) for _ in workers)
     for worker in workers:
         worker.join(10)
-    return total / seconds
+    return total / seconds, total
 
 
-def load_rate(url: str, method: str, body: object, seconds: float) -> float:
+def load_rate(
+    server: tuple[str, int], path: str, method: str, body: object, seconds: float
+) -> tuple[float, float | None]:
+    """Requests/s on ``path`` of ``server`` (its URL and process), and the server's CPU
+    microseconds per request (None where the system does not say)."""
+    url, pid = server
+    before = cpu_s(pid)
     if shutil.which("wrk"):
-        return wrk_rate(url, method, body, seconds)
-    return processes_rate(url, method, body, seconds)
+        rate, count = wrk_rate(url + path, method, body, seconds)
+    else:
+        rate, count = processes_rate(url + path, method, body, seconds)
+    after = cpu_s(pid)
+    if before is None or after is None or not count:
+        return rate, None
+    return rate, (after - before) / count * 1e6
 
 
 def register_body() -> dict[str, object]:
@@ -210,16 +244,25 @@ def register_body() -> dict[str, object]:
     return {"submit": "Set", "register": 1, "value": 7, "range_start": 1, "range_stop": 1}
 
 
-def against_references(url: str, seconds: float) -> None:
-    """Our GET /clock and PUT input against the bare app and pymodbus's REST API."""
+def against_references(server: tuple[str, int], seconds: float) -> None:
+    """Our GET /clock and PUT input against the bare app and pymodbus's REST API
+    (``server``: the plant's URL and process id)."""
     tool = "wrk" if shutil.which("wrk") else f"{CONNECTIONS} client processes"
-    print(f"load: {tool}, {CONNECTIONS} connections, best of {ROUNDS} rounds of {seconds:g} s")
+    print(
+        f"load: {tool}, {CONNECTIONS} connections; median of {ROUNDS} rounds of {seconds:g} s,"
+        f" alternated; uvicorn's HTTP parser: {http_parser()}"
+    )
+    print(f"load average before: {_load()}")
     bare_port = free_port()
     have_sim = importlib.util.find_spec("aiohttp") is not None
-    figures: dict[str, float] = {}
+    rates: dict[str, list[float]] = {}
+    cpus: dict[str, list[float]] = {}
 
-    def best(name: str, rate: float) -> None:
-        figures[name] = max(figures.get(name, 0.0), rate)
+    def measure(name: str, on: tuple[str, int], path: str, method: str, body: object) -> None:
+        rate, cpu = load_rate(on, path, method, body, seconds)
+        rates.setdefault(name, []).append(rate)
+        if cpu is not None:
+            cpus.setdefault(name, []).append(cpu)
 
     put_path = "/devices/tes1/inputs/3"
     sim_port = free_port()
@@ -230,26 +273,41 @@ def against_references(url: str, seconds: float) -> None:
         sim_args = ["--serve-pymodbus", str(sim_port), str(free_port()), tmp]
         with served(sim_args, sim_port) if have_sim else _nothing() as sim:
             for _ in range(ROUNDS):
-                best("get", load_rate(url + "/clock", "GET", None, seconds))
-                best("get bare", load_rate(bare + "/clock", "GET", None, seconds))
-                best("put", load_rate(url + put_path, "PUT", INPUT_BODY, seconds))
-                best("put bare", load_rate(bare + put_path, "PUT", INPUT_BODY, seconds))
-                if sim:
-                    rest = sim + "/restapi/registers"
-                    best("put sim", load_rate(rest, "POST", register_body(), seconds))
-    get, put = figures["get"], figures["put"]
-    get_ratio = get / figures["get bare"]
-    print(f"GET /clock, fieldtwin (snapshot):    {get:8.0f} requests/s")
-    print(f"GET /clock, bare FastAPI + uvicorn:  {figures['get bare']:8.0f} requests/s")
-    print(f"  ratio {get_ratio:.2f} ({_verdict(get_ratio, GET_TARGET)})")
-    print(f"PUT input, fieldtwin (inbox):        {put:8.0f} requests/s")
-    print(f"PUT input, bare FastAPI + uvicorn:   {figures['put bare']:8.0f} requests/s")
-    if "put sim" in figures:
-        put_ratio = put / figures["put sim"]
-        print(f"POST /restapi/registers, pymodbus:   {figures['put sim']:8.0f} requests/s")
-        print(f"  ratio {put_ratio:.2f} ({_verdict(put_ratio, PUT_TARGET)})")
+                measure("get", server, "/clock", "GET", None)
+                measure("get bare", bare, "/clock", "GET", None)
+                measure("put", server, put_path, "PUT", INPUT_BODY)
+                measure("put bare", bare, put_path, "PUT", INPUT_BODY)
+                if sim[0]:
+                    measure("put sim", sim, "/restapi/registers", "POST", register_body())
+    rate = {name: statistics.median(each) for name, each in rates.items()}
+    cpu = {name: statistics.median(each) for name, each in cpus.items()}
+
+    def line(label: str, name: str) -> None:
+        used = f"  {cpu[name]:6.0f} us CPU/request" if name in cpu else ""
+        print(f"{label:37s}{rate[name]:8.0f} requests/s{used}")
+
+    def ratio(ours: str, theirs: str, target: float) -> None:
+        throughput = rate[ours] / rate[theirs]
+        said = f"  ratio {throughput:.2f} ({_verdict(throughput, target)})"
+        if ours in cpu and theirs in cpu:
+            said += f"; CPU per request ratio {cpu[theirs] / cpu[ours]:.2f}"
+        print(said)
+
+    line("GET /clock, fieldtwin (snapshot):", "get")
+    line("GET /clock, bare FastAPI + uvicorn:", "get bare")
+    ratio("get", "get bare", GET_TARGET)
+    line("PUT input, fieldtwin (inbox):", "put")
+    line("PUT input, bare FastAPI + uvicorn:", "put bare")
+    if "put sim" in rate:
+        line("POST /restapi/registers, pymodbus:", "put sim")
+        ratio("put", "put sim", PUT_TARGET)
     else:
         print("pymodbus simulator REST API: skipped (needs aiohttp: 'pymodbus[simulator]')")
+    print(f"load average after: {_load()}")
+
+
+def _load() -> str:
+    return " ".join(f"{x:.2f}" for x in os.getloadavg())
 
 
 def _verdict(ratio: float, target: float) -> str:
@@ -257,8 +315,8 @@ def _verdict(ratio: float, target: float) -> str:
 
 
 @contextmanager
-def _nothing() -> Iterator[str]:
-    yield ""
+def _nothing() -> Iterator[tuple[str, int]]:
+    yield "", 0
 
 
 def api_rate(url: str, seconds: float) -> tuple[float, float]:
@@ -375,9 +433,13 @@ def main() -> None:
     if len(sys.argv) > 1 and sys.argv[1] == "--serve-pymodbus":
         serve_pymodbus(int(sys.argv[2]), int(sys.argv[3]), sys.argv[4])
         return
-    seconds = float(sys.argv[1]) if len(sys.argv) > 1 else 3.0
+    words = [word for word in sys.argv[1:] if word != "--references"]
+    only_references = len(words) < len(sys.argv) - 1
+    seconds = float(words[0]) if words else 3.0
     with tempfile.TemporaryDirectory() as tmp, fieldtwin_run(default_plant_copy(Path(tmp))) as run:
-        against_references(run.url, seconds)
+        against_references((run.url, run.proc.pid), seconds)
+        if only_references:
+            return
         clock, inputs = api_rate(run.url, seconds)
         print(f"API GET /clock, one connection:      {clock:8.0f} requests/s")
         print(f"API PUT /devices/tes1/inputs/3, one: {inputs:8.0f} requests/s")

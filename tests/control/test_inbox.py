@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import asyncio
+import os
+import select
+import socket
 import threading
 from collections.abc import Iterator
 from concurrent.futures import Future
@@ -9,6 +13,7 @@ from concurrent.futures import Future
 import pytest
 
 from fieldtwin.clock import MS, SimClock
+from fieldtwin.control.sim import CommandTimeout, Sim
 from fieldtwin.runtime.inbox import Inbox, InboxClosed, InboxFull
 from fieldtwin.runtime.runner import Runner
 
@@ -137,4 +142,55 @@ def test_a_stop_inside_a_command_s_own_run_ends_the_run_around_it() -> None:
     runner.run_forever()
     assert clock.now == 5 * MS
     runner.take_commands(None)
+    inbox.close()
+
+
+def test_commands_waiting_share_one_wakeup_and_run_in_one_turn() -> None:
+    inbox = Inbox()
+    peer = socket.socket(fileno=os.dup(inbox.fileno()))  # the wakeup descriptor, to peek at
+    try:
+        ran: list[int] = []
+        for i in range(3):
+            inbox.submit(lambda i=i: ran.append(i))
+        assert select.select([peer], [], [], 0)[0]
+        assert len(peer.recv(16, socket.MSG_PEEK)) == 1  # the first command's wakeup only
+        assert inbox.run_pending() == 3 and ran == [0, 1, 2]
+        assert not select.select([peer], [], [], 0)[0]
+        inbox.submit(lambda: ran.append(3))  # after the turn: a wakeup of its own
+        assert select.select([peer], [], [], 0)[0]
+        assert inbox.run_pending() == 1 and ran == [0, 1, 2, 3]
+    finally:
+        peer.close()
+        inbox.close()
+
+
+def test_a_command_not_taken_in_time_times_out_and_never_runs() -> None:
+    inbox = Inbox()
+    ran: list[str] = []
+    sim = Sim(inbox)
+
+    async def late() -> None:
+        await sim.call(lambda: ran.append("late"), wait_s=0.01)
+
+    with pytest.raises(CommandTimeout, match=r"within 0\.01 s"):
+        asyncio.run(late())
+    inbox.run_pending()
+    assert ran == [] and inbox.executed == 0  # cancelled before its turn
+    inbox.close()
+
+
+def test_a_request_cancelled_while_waiting_is_cancelled_not_timed_out() -> None:
+    inbox = Inbox()
+    sim = Sim(inbox)
+
+    async def cancelled() -> None:
+        waiting = asyncio.ensure_future(sim.call(lambda: None, wait_s=WAIT_S))
+        await asyncio.sleep(0)  # the request waits for its command
+        waiting.cancel()
+        with pytest.raises(asyncio.CancelledError):
+            await waiting
+
+    asyncio.run(cancelled())
+    inbox.run_pending()
+    assert inbox.executed == 0  # cancelled with its request
     inbox.close()

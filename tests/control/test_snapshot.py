@@ -40,6 +40,21 @@ def test_a_value_is_current_until_a_change_or_its_age() -> None:
     assert made == [1]
 
 
+def test_while_a_refresh_is_under_way_a_recent_value_serves_until_a_change() -> None:
+    wall = [100.0]
+    snapshot = Snapshot(max_age_s=0.005, now=lambda: wall[0], refreshing_s=0.05)
+    assert snapshot.recent("clock") is None
+    snapshot.take("clock", lambda: {"t": 1})
+    wall[0] += 0.02
+    assert snapshot.get("clock") is None  # too old to be current: a refresh is due
+    assert snapshot.recent("clock") == {"t": 1}  # what readers take while it runs
+    wall[0] += 0.0301
+    assert snapshot.recent("clock") is None  # older than refreshing_s
+    snapshot.take("clock", lambda: {"t": 2})
+    snapshot.changed()  # a command ran: read-your-writes, never the value before it
+    assert snapshot.recent("clock") is None
+
+
 def test_a_read_that_fails_publishes_nothing() -> None:
     snapshot = Snapshot()
 

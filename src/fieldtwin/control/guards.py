@@ -169,6 +169,7 @@ class TokenGate:
 
 STATE_CHANGING = frozenset({"POST", "PUT", "DELETE", "PATCH"})
 LOOPBACK_NAMES = frozenset({"localhost", "127.0.0.1", "::1"})
+ROUTE_KINDS = 1024  # (method, path) pairs remembered by BrowserGate; then forgotten
 NAVIGATION_PAGES = frozenset({"/", "/docs"})  # what another site may link to (GET only)
 SECURITY_HEADERS = [
     (b"x-frame-options", b"DENY"),  # no page may frame the dashboard (clickjacking)
@@ -231,6 +232,21 @@ class BrowserGate:
         self.allow_origins = frozenset(o for o in map(origin_of, allow_origins) if o)
         self.bodyless = bodyless or (lambda scope: False)
         self.routed = routed or (lambda scope: True)
+        # (routed, bodyless) by method and path: the routes are fixed once served, and a
+        # lookup tries every route's pattern (bounded: cleared when full)
+        self._kinds: dict[tuple[str, str, str], tuple[bool, bool]] = {}
+
+    def _kind(self, scope: Scope, method: str) -> tuple[bool, bool]:
+        """Whether a route takes this request, and whether that route takes no body."""
+        key = (method, str(scope.get("root_path", "")), str(scope.get("path", "")))
+        found = self._kinds.get(key)
+        if found is None:
+            routed = self.routed(scope)
+            found = (routed, routed and self.bodyless(scope))
+            if len(self._kinds) >= ROUTE_KINDS:
+                self._kinds.clear()
+            self._kinds[key] = found
+        return found
 
     def _host_ok(self, host: str | None) -> bool:
         if self.any_host:  # bound to every interface: the token guards it (a documented choice)
@@ -277,12 +293,14 @@ class BrowserGate:
                 message = {**message, "headers": [*message.get("headers", []), *SECURITY_HEADERS]}
             await send(message)
 
-        if method in STATE_CHANGING and self.routed(scope):
+        changing = method in STATE_CHANGING
+        routed, takes_none = self._kind(scope, method) if changing else (False, False)
+        if routed:
             kind = headers.get(b"content-type", "").split(";")[0].strip().lower()
             if kind != "application/json":
                 await _json(send, 415, _not_json(kind))
                 return
-            if self.bodyless(scope):
+            if takes_none:
                 body = await _read_body(receive)
                 if not _empty_object(body):
                     await _json(send, 422, EMPTY_BODY)

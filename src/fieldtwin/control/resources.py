@@ -139,6 +139,9 @@ class Control:
         self._next_exchange = 1
         # the reads that change nothing, as the simulation's thread last made them
         self.snapshot = Snapshot()
+        self._ids: dict[str, Device] = {}  # devices(), as last made
+        self._ids_key: tuple[tuple[int, object], ...] | None = None
+        self._held: tuple[Device, ...] = ()
         # every command through the plant's door (API, attached console, scenario) makes
         # it stale before its answer goes out: a later read sees the command's effect
         plant.door.watch(_Stale(self.snapshot))
@@ -148,11 +151,23 @@ class Control:
     # --- the plant and its devices -----------------------------------------------
 
     def devices(self) -> dict[str, Device]:
+        """Each device by its id (a copy: the caller may keep or change it)."""
+        return dict(self._by_id())
+
+    def _by_id(self) -> dict[str, Device]:
+        """The ids, made again only when a device or an address changed (a module
+        removed or inserted, a TES's slave number): a command's lookup is one pass
+        over the devices, not n x n."""
         devices = self.plant.devices
-        return {device_id(d, devices): d for d in devices}
+        key = tuple((id(d), d.address) for d in devices)
+        if key != self._ids_key:
+            self._ids = {device_id(d, devices): d for d in devices}
+            self._ids_key = key
+            self._held = tuple(devices)  # kept alive: no other object takes their id()
+        return self._ids
 
     def device(self, ident: str) -> Device:
-        found = self.devices()
+        found = self._by_id()
         device = found.get(ident)
         if device is None:
             raise NotFound(f"no device {ident!r} (allowed: {', '.join(found) or 'none'})")

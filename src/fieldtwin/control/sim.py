@@ -112,14 +112,30 @@ class Sim:
 
     @staticmethod
     async def _wait(future: Future[T], wait_s: float) -> T:
+        # one asyncio future chained to the command's and one timer (asyncio.wait_for
+        # adds a waiter future and a callback of its own: every request pays them)
+        waiter = asyncio.wrap_future(future)
+        expired = False
+
+        def expire() -> None:
+            nonlocal expired
+            expired = True
+            # cancels ``future`` too: not yet started, it never runs; running, its
+            # effect stands
+            waiter.cancel()
+
+        timer = asyncio.get_running_loop().call_later(wait_s, expire)
         try:
-            return await asyncio.wait_for(asyncio.wrap_future(future), wait_s)
-        except TimeoutError:
-            future.cancel()  # not yet started: it never runs; running: its effect stands
+            return await waiter
+        except asyncio.CancelledError:
+            if not expired:
+                raise  # the request itself was cancelled
             raise CommandTimeout(
                 f"the simulation did not finish the command within {wait_s:g} s"
                 " (if it had started, its effect stands)"
             ) from None
+        finally:
+            timer.cancel()
 
 
 __all__ = ["COMMANDS", "DEFAULT_WAIT_S", "MAX_WAIT_S", "CommandTimeout", "Sim", "serve"]

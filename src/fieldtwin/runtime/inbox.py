@@ -86,9 +86,13 @@ class Inbox:
                 raise InboxClosed("the simulation has stopped")
             if len(self._queue) >= self.max_pending:
                 raise InboxFull(f"{self.max_pending} commands already wait for the simulation")
+            # a command already waiting has sent its wakeup, and the runner takes the whole
+            # queue after it drains the wakeups: this one is taken in the same turn
+            wake = not self._queue
             self._queue.append(item)
-        with contextlib.suppress(BlockingIOError):  # full of wakeups already: it will look
-            self._writer.send(b"\0")
+        if wake:
+            with contextlib.suppress(BlockingIOError):  # full of wakeups already: it will look
+                self._writer.send(b"\0")
         return future
 
     def __len__(self) -> int:

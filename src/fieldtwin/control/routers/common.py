@@ -60,8 +60,13 @@ class Hop:
         version = snapshot.version
         pending = self._pending.get(key)
         if pending is not None and pending[0] == version:
-            # a hop that left since the last command: its value is made after this
-            # request came, so it is this request's answer too
+            # a refresh is under way and no command ran since: the value it replaces,
+            # if recent enough (Snapshot.recent), else the refresh's own (made after
+            # this request came, so it is this request's answer too)
+            recent = snapshot.recent(key)
+            if recent is not None:
+                kept: T = recent
+                return kept
             shared: T = await asyncio.shield(pending[1])
             return shared
         hop = asyncio.ensure_future(self.sim.call(lambda: snapshot.take(key, fn)))
