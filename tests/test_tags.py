@@ -7,9 +7,11 @@ from pathlib import Path
 
 import pytest
 
+from fieldtwin.control.observer import Observer
 from fieldtwin.errors import ConfigError
 from fieldtwin.plant import load_plant
 from fieldtwin.plant.tags import UnknownTag, read_value, resolve, tag_value
+from fieldtwin.runtime.events import EventBus
 
 PLANT = """
 [plc]
@@ -270,5 +272,28 @@ def test_a_trend_ring_is_bounded_and_sampled_at_most_every_period(tmp_path: Path
             trends.track("W999")
         with pytest.raises(UnknownTag):
             trends.track("nope")
+    finally:
+        plant.close()
+
+
+def test_an_object_event_carries_the_tag_beside_the_object(tmp_path: Path) -> None:
+    plant = load_plant(
+        plant_with(tmp_path, TAGS + '[[tag]]\nname = "aem.out0"\nobject = "OW5,0"\n')
+    )
+    try:
+        bus = EventBus()
+        sub = bus.subscribe(["object"])
+        observer = Observer(plant.devices, bus, plant.tags)
+        observer.sample(0)  # the first look publishes nothing
+        tes = next(d for d in plant.devices if str(d.address).endswith(" 2"))
+        register = plant.tags.named("watchdog").source.name
+        tes.objects().write(register, tes.objects().peek(register) ^ 1)
+        aem = next(d for d in plant.devices if str(d.address) == "5")
+        aem.objects().write("OW5,0", aem.objects().peek("OW5,0") ^ 1)
+        aem.objects().write("OW5,1", aem.objects().peek("OW5,1") ^ 1)
+        observer.sample(1)
+        got = {e.data["object"]: e.data.get("tag") for e in sub.take()}
+        assert got[register] == "watchdog" and got["OW5,0"] == "aem.out0"
+        assert "OW5,1" in got and got["OW5,1"] is None  # no tag: none in the event
     finally:
         plant.close()

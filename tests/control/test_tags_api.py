@@ -99,6 +99,8 @@ def test_a_tag_is_written_and_set_in_its_unit(tagged: Running) -> None:
         assert set_input["value"] == pytest.approx(4.5, abs=0.01)
         refused = http.put("/tags/nope", json={"value": 1})
         assert refused.status_code == 404
+        mismatch = http.put("/tags/pressure", json={"value": True})  # an analog input
+        assert mismatch.status_code == 409 and "not a number" in mismatch.json()["error"]
         bad = http.put("/tags/level", json={"value": [1]})
         assert bad.status_code == 422 and bad.json()["field"].startswith("body.value")
 

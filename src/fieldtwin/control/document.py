@@ -44,7 +44,7 @@ EMPTY_BODY_SCHEMA: dict[str, Any] = {
     "description": "this route takes no value: send {} (a JSON body, which an HTML form cannot)",
 }
 NAMED_IN_BODY = frozenset({"/plc/remove", "/plc/insert"})  # a module slot: 404 if empty
-CONFLICTS = frozenset({"/clock/run-until", "/exchanges"})  # refused by the plant's state: 409
+CONFLICTS = frozenset({"/clock/run-until", "/exchanges", "/tags/{name}"})  # refused: 409
 WHY = {
     400: "the plant refuses (a value it does not take, a busy Text Block, a body not UTF-8)"
     ", or a Host header that is not this plant's",

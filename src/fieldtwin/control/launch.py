@@ -76,7 +76,7 @@ def launch(
     origins = check_origins(allow_origins)
     server = ControlServer(control, inbox, sock, token, allow_origins=origins)
     runner.take_commands(inbox)
-    launched = Launched(server, inbox, runner, Observer(plant.devices, bus))
+    launched = Launched(server, inbox, runner, Observer(plant.devices, bus, plant.tags))
     launched.trends = control.trends
     launched.withdraw = serve(plant.door, control, control.console.handle)
     try:

@@ -5,7 +5,9 @@ clock event, so the simulation's schedule is the same observed or not) and
 only while somebody subscribes, it peeks every device's objects and LEDs
 through the Device face and publishes what changed since the last look:
 ``object`` events (``{"object": "IW5,0", "value": 4104, "was": 4096}``) and
-``led`` events (``{"led": "ERR", "state": "on", "was": "off"}``).  Between two
+``led`` events (``{"led": "ERR", "state": "on", "was": "off"}``).  An object a
+plant-file tag names carries it (``"tag": "tank1.level"``: the tag beside the object,
+looked up once when the object's peek is bound).  Between two
 ticks a value that changes and changes back is not seen: the stream shows the
 plant at the tick's resolution (docs/control.md, "Events").
 """
@@ -14,8 +16,9 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 
-from fieldtwin.devices.face import Device, peeker
+from fieldtwin.devices.face import Device, device_id, peeker
 from fieldtwin.errors import FieldtwinError
+from fieldtwin.plant.tags import Tags
 from fieldtwin.runtime.events import EventBus
 
 MAX_OBJECTS = 4096  # objects one device is looked at for (a TES map is far smaller)
@@ -24,14 +27,15 @@ MAX_OBJECTS = 4096  # objects one device is looked at for (a TES map is far smal
 class Observer:
     """Publishes object and LED changes of ``devices`` on ``bus``."""
 
-    def __init__(self, devices: Sequence[Device], bus: EventBus) -> None:
+    def __init__(self, devices: Sequence[Device], bus: EventBus, tags: Tags | None = None) -> None:
         self.devices = list(devices)
         self.bus = bus
+        self.tags = tags if tags is not None else Tags()
         self._objects: dict[tuple[str, str], int] = {}
         self._leds: dict[tuple[str, str], str] = {}
         self._watching = False  # a first look after a subscriber came publishes nothing
-        # id(device) -> (name, its peek bound once) of each object, looked up once
-        self._peeks: dict[int, list[tuple[str, Callable[[], int]]]] = {}
+        # id(device) -> (name, its peek bound once, its tag) of each object, looked up once
+        self._peeks: dict[int, list[tuple[str, Callable[[], int], str | None]]] = {}
 
     def sample(self, now: int) -> None:
         if not self.bus.active:
@@ -57,9 +61,10 @@ class Observer:
         if peeks is None:  # a TES lists "H'003' name": the address is enough
             objects = device.objects()
             names = [entry.address for entry in objects.names()[:MAX_OBJECTS]]
-            peeks = [(name, peeker(objects, name)) for name in names]  # names parsed once
-            self._peeks[id(device)] = peeks
-        for name, peek in peeks:
+            ident = device_id(device, self.devices)
+            peeks = [(name, peeker(objects, name), self._tag(ident, name)) for name in names]
+            self._peeks[id(device)] = peeks  # names parsed and tags looked up once
+        for name, peek, tag in peeks:
             try:
                 value = peek()
             except FieldtwinError:
@@ -68,9 +73,18 @@ class Observer:
             was = self._objects.get(key)
             self._objects[key] = value
             if not first and was is not None and was != value:
-                self.bus.publish(
-                    now, "object", address, {"object": name, "value": value, "was": was}
-                )
+                data: dict[str, object] = {"object": name, "value": value, "was": was}
+                if tag is not None:
+                    data["tag"] = tag
+                self.bus.publish(now, "object", address, data)
+
+    def _tag(self, ident: str, name: str) -> str | None:
+        """The tag naming the object ``name`` of the device ``ident`` (a PL7 object, or a
+        device's register as its objects list it), if any."""
+        found = self.tags.of_object(name)
+        if found is None:
+            found = self.tags.of_device(ident, "register", name)
+        return found.name if found is not None else None
 
 
 __all__ = ["Observer"]

@@ -25,15 +25,29 @@ import math
 import re
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Literal, Protocol
 
 from fieldtwin.devices.face import Device, Family, device_id
 from fieldtwin.errors import ConfigError
 from fieldtwin.words import parse_word
 
 if TYPE_CHECKING:
-    from fieldtwin.plant.value import Plant
     from fieldtwin.tsx.plc import Plc
+
+
+class Plant(Protocol):
+    """What the tags read of a plant (fieldtwin.plant.value.Plant; named here by its
+    shape, so that the plant's value and its tags import in one direction only)."""
+
+    @property
+    def plc(self) -> Plc | None: ...
+
+    @property
+    def devices(self) -> Sequence[Device]: ...
+
+    @property
+    def tags(self) -> Tags: ...
+
 
 TAG_KEYS = (
     "name",

@@ -10,7 +10,7 @@ from fastapi import APIRouter, Query
 from pydantic import Field
 
 from fieldtwin.control.replies import Reply
-from fieldtwin.control.resources import Control, NotFound
+from fieldtwin.control.resources import Conflict, Control, NotFound
 from fieldtwin.control.routers.common import REPLY, Hop
 from fieldtwin.control.schemas import Closed
 from fieldtwin.control.trends import TooManySeries
@@ -114,6 +114,15 @@ def router(hop: Hop) -> APIRouter:
     )
     async def write_tag(name: str, body: TagBody) -> TagJson:
         tag = await hop.run(lambda: _tag(c, name))
+        try:
+            await write(tag, body.value)
+        except NotFound:
+            raise
+        except ConfigError as exc:  # a value the tag's source does not take: 409
+            raise Conflict(str(exc)) from None
+        return TagJson.model_validate(await hop.run(lambda: tag_json(c, tag)))
+
+    async def write(tag: Tag, value: bool | float | str) -> None:
         source = tag.source
         if source.kind == "output":
             raise ConfigError(
@@ -122,14 +131,13 @@ def router(hop: Hop) -> APIRouter:
             )
         if source.kind == "input":
             assert source.device is not None
-            await hop.do("set_input", source.device, source.name, raw_of(tag, body.value), None)
+            await hop.do("set_input", source.device, source.name, raw_of(tag, value), None)
         elif source.kind == "register":
             assert source.device is not None
-            await hop.do("write_object", source.device, source.name, _word(tag, body.value))
+            await hop.do("write_object", source.device, source.name, _word(tag, value))
         else:  # a PL7 object: the console's write, a command through the door as any
-            lines = await hop.sim.line(f"write {source.name} {_word(tag, body.value)}")
+            lines = await hop.sim.line(f"write {source.name} {_word(tag, value)}")
             assert isinstance(lines, list)
-        return TagJson.model_validate(await hop.run(lambda: tag_json(c, tag)))
 
     @api.get("/trends", summary="the series kept and the dashboard's default trends", **REPLY)
     async def trends() -> TrendsJson:
