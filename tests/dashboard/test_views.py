@@ -88,7 +88,9 @@ def test_each_tes_shows_its_last_request_and_outcome(page: Any, plant: Running) 
         curl(plant, "PUT", "/devices/tes2/faults/late_answer", {"params": {"ms": 200}})
         assert not client.read_holding_registers(0, count=2, device_id=2).isError()
         late = f"document.querySelector('{outcome}')?.textContent === 'answers after 200 ms'"
-        wait_sim(page, late, 5)
+        # the reply's event may come in a later batch than the request's: wait for both
+        replied = "document.querySelector('#tes-tes2 [data-f=last-request]')"
+        wait_sim(page, f"{late} && ({replied}?.textContent || '').includes('answered')", 5)
         shown = page.locator("#tes-tes2 [data-f=last-request]").inner_text()
         assert "read_holding_registers @0 x2" in shown and "answered" in shown
         curl(plant, "PUT", "/devices/tes2/faults/late_answer", {"active": False})
