@@ -64,6 +64,13 @@ def _face(plc: Plc, mod: Dem24) -> tuple[object, ...]:
         if monitor is None
         else [h.time if h is not None and h.active else None for h in monitor._handles]
     )
+    return (*module_state(plc, mod, checks), plc.clock.fired, plc.clock.pending)
+
+
+def module_state(plc: Plc, mod: Dem24, checks: list[int | None] | None) -> tuple[object, ...]:
+    """What a reference run and a shortcut run must agree on: the PLC's view, the module's
+    words, bits, LEDs, stack, latches, the given next oscillation checks, the detectors."""
+    monitor = mod.oscillation
     detectors = None if monitor is None else [(d.state, list(d._times)) for d in monitor.detectors]
     latches = {b: (f.active, f.latched, f.acknowledged) for b, f in mod._faults._latches.items()}
     stack = mod.stack
@@ -83,8 +90,6 @@ def _face(plc: Plc, mod: Dem24) -> tuple[object, ...]:
         latches,
         checks,
         detectors,
-        plc.clock.fired,
-        plc.clock.pending,
     )
 
 

@@ -27,12 +27,10 @@ from hypothesis import strategies as st
 
 import fieldtwin.clock as clock_module
 from fieldtwin.clock import MS, S
-from fieldtwin.devices.dem24.status import details
 from fieldtwin.signals import Edges, RandomEdges
 from fieldtwin.tsx.dem24 import Dem24
 from fieldtwin.tsx.plc import Plc
-from tests.tsx.dem24.helpers import SLOT
-from tests.tsx.dem24.test_edge_shortcuts import _outcome, _setup, _step
+from tests.tsx.dem24.test_edge_shortcuts import _outcome, _setup, _step, module_state
 
 
 def _make(fast: bool) -> tuple[Plc, Dem24]:
@@ -53,27 +51,8 @@ def _make(fast: bool) -> tuple[Plc, Dem24]:
 def _face(plc: Plc, mod: Dem24) -> tuple[object, ...]:
     monitor = mod.oscillation
     checks = None if monitor is None else [monitor.check_at(c) for c in range(24)]
-    detectors = None if monitor is None else [(d.state, list(d._times)) for d in monitor.detectors]
-    latches = {b: (f.active, f.latched, f.acknowledged) for b, f in mod._faults._latches.items()}
-    stack = mod.stack
-    return (
-        plc.now,
-        plc.cycles,
-        plc.image(0, SLOT),
-        mod.bus_read(),
-        list(mod.iw),
-        mod.i_bits,
-        mod.leds,
-        mod.state,
-        details(mod),
-        mod.edges_stamped,
-        stack.peek(),
-        (stack.lost, stack.total_lost, stack.total_stored),
-        latches,
-        checks,
-        detectors,
-        list(mod.pushed),  # type: ignore[attr-defined]
-    )
+    pushed = list(mod.pushed)  # type: ignore[attr-defined]
+    return (*module_state(plc, mod, checks), pushed)
 
 
 @settings(max_examples=60, deadline=None)
