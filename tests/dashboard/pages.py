@@ -1,12 +1,25 @@
-"""Helpers for the dashboard tests: open the page, wait in simulated time (bounded)."""
+"""Helpers for the dashboard tests: open the page, wait in simulated time (bounded),
+call the plant's API as curl would."""
 
 from __future__ import annotations
 
+import json
+import urllib.request
 from typing import Any
 
 from tests.control.plantproc import Running
 
 WALL_MARGIN_MS = 15_000  # on top of the simulated bound at the plant's speed
+
+
+def curl(plant: Running, method: str, path: str, body: object | None = None) -> Any:
+    """One JSON request to the plant's API (bounded wait), its JSON answer."""
+    data = None if body is None else json.dumps(body).encode()
+    request = urllib.request.Request(
+        f"{plant.url}{path}", data=data, method=method, headers={"content-type": "application/json"}
+    )
+    with urllib.request.urlopen(request, timeout=10) as answer:
+        return json.load(answer)
 
 
 def open_dashboard(page: Any, plant: Running, rate: int | None = None) -> None:

@@ -3,23 +3,12 @@ are offered, each with the parameter hint of what it takes (issue 21)."""
 
 from __future__ import annotations
 
-import json
-import urllib.request
 from typing import Any
 
 from tests.control.plantproc import Running
-from tests.dashboard.pages import open_controls, open_dashboard, wait_sim
+from tests.dashboard.pages import curl, open_controls, open_dashboard, wait_sim
 
 BUTTON = "#tes-tes1 button.fault[data-fault=late_answer]"
-
-
-def curl(plant: Running, method: str, path: str, body: object | None = None) -> Any:
-    data = None if body is None else json.dumps(body).encode()
-    request = urllib.request.Request(
-        f"{plant.url}{path}", data=data, method=method, headers={"content-type": "application/json"}
-    )
-    with urllib.request.urlopen(request, timeout=10) as answer:
-        return json.load(answer)
 
 
 def test_a_fault_set_with_curl_lights_its_button_without_a_reload(

@@ -4,16 +4,14 @@ loop is, with its hint, lit when set with curl) and its output in volts, from a 
 
 from __future__ import annotations
 
-import json
 import sys
-import urllib.request
 from collections.abc import Iterator
 from typing import Any
 
 import pytest
 
 from tests.control.plantproc import ROOT, Running, fieldtwin_run_with
-from tests.dashboard.pages import open_controls, open_dashboard
+from tests.dashboard.pages import curl, open_controls, open_dashboard
 from tests.devices.madeup import LEVEL
 
 RUN = "import sys, tests.devices.madeup; from fieldtwin.cli import main; sys.exit(main())"
@@ -37,17 +35,6 @@ def plant(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Running]:
         yield running
 
 
-def _put(plant: Running, path: str, body: object) -> Any:
-    request = urllib.request.Request(
-        f"{plant.url}{path}",
-        data=json.dumps(body).encode(),
-        method="PUT",
-        headers={"content-type": "application/json"},
-    )
-    with urllib.request.urlopen(request, timeout=10) as answer:
-        return json.load(answer)
-
-
 def test_the_made_up_device_on_the_dashboard(page: Any, plant: Running) -> None:
     open_dashboard(page, plant)
     box = open_controls(page, "#mod-3")
@@ -57,11 +44,11 @@ def test_the_made_up_device_on_the_dashboard(page: Any, plant: Running) -> None:
     ]
     hint = box.locator("button.fault[data-fault=noise] + input.args")
     assert hint.get_attribute("placeholder") == "mv=1"
-    _put(plant, "/devices/3/faults/noise", {"params": {"mv": 50}})
+    curl(plant, "PUT", "/devices/3/faults/noise", {"params": {"mv": 50}})
     button = "#mod-3 button.fault[data-fault=noise]"
     page.wait_for_function(f"document.querySelector('{button}').classList.contains('active')")
     assert "noise mv=50" in page.locator("#mod-3 [data-f=faults]").inner_text()
-    _put(plant, "/devices/3/objects/OW3,0", {"value": 4500})
+    curl(plant, "PUT", "/devices/3/objects/OW3,0", {"value": 4500})
     page.wait_for_function(
         "document.querySelector('#mod-3 [data-aout=\"0\"]').textContent === '4.500 V'"
     )
@@ -75,8 +62,8 @@ def test_its_front_is_drawn_from_its_typed_panel(page: Any, plant: Running) -> N
         f"/^2\\.0[0-9]0 V$/.test(document.querySelector('{reading}')?.textContent)"
     )
     assert page.locator("#mod-3 [data-field=loop]").inner_text() == "4-20"
-    _put(plant, "/devices/3/faults/float_stuck", {"active": True})
+    curl(plant, "PUT", "/devices/3/faults/float_stuck", {"active": True})
     flags = "#mod-3 [data-flags=level]"
     page.wait_for_function(f"document.querySelector('{flags}').textContent === 'float_stuck'")
-    _put(plant, "/devices/3/faults/float_stuck", {"active": False})
+    curl(plant, "PUT", "/devices/3/faults/float_stuck", {"active": False})
     page.wait_for_function(f"document.querySelector('{flags}').textContent === ''")

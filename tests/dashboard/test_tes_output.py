@@ -3,8 +3,6 @@
 
 from __future__ import annotations
 
-import json
-import urllib.request
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -12,7 +10,7 @@ from typing import Any
 import pytest
 
 from tests.control.plantproc import Running, fieldtwin_run
-from tests.dashboard.pages import open_dashboard
+from tests.dashboard.pages import curl, open_dashboard
 
 PLANT = """
 [[tes]]
@@ -30,19 +28,10 @@ def plant(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Running]:
         yield running
 
 
-def _call(plant: Running, method: str, path: str, body: object | None = None) -> Any:
-    data = None if body is None else json.dumps(body).encode()
-    request = urllib.request.Request(
-        f"{plant.url}{path}", data=data, method=method, headers={"content-type": "application/json"}
-    )
-    with urllib.request.urlopen(request, timeout=10) as answer:
-        return json.load(answer)
-
-
 def test_a_tes_4sa_analog_output_shows_in_volts(page: Any, plant: Running) -> None:
     open_dashboard(page, plant)
-    _call(plant, "PUT", "/devices/tes2/objects/H'014'", {"value": 0x4000})
-    a0 = next(o for o in _call(plant, "GET", "/devices/tes2/outputs") if o["name"] == "a0")
+    curl(plant, "PUT", "/devices/tes2/objects/H'014'", {"value": 0x4000})
+    a0 = next(o for o in curl(plant, "GET", "/devices/tes2/outputs") if o["name"] == "a0")
     assert a0["unit"] == "V" and a0["raw"] == 0x4000
     shown = f"{a0['value']:.3f} V"
     cell = "#tes-tes2 [data-aout=a0]"

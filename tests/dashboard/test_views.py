@@ -6,8 +6,6 @@ as stopped (no green RUN, no lit LED, a banner)."""
 
 from __future__ import annotations
 
-import json
-import urllib.request
 from pathlib import Path
 from typing import Any
 
@@ -17,16 +15,7 @@ from pymodbus.exceptions import ModbusException
 
 from tests.control.plantproc import Running, default_plant_copy, fieldtwin_run
 from tests.dashboard.browser import artifact
-from tests.dashboard.pages import open_controls, open_dashboard, wait_sim
-
-
-def curl(plant: Running, method: str, path: str, body: object | None = None) -> Any:
-    data = None if body is None else json.dumps(body).encode()
-    request = urllib.request.Request(
-        f"{plant.url}{path}", data=data, method=method, headers={"content-type": "application/json"}
-    )
-    with urllib.request.urlopen(request, timeout=10) as answer:
-        return json.load(answer)
+from tests.dashboard.pages import curl, open_controls, open_dashboard, wait_sim
 
 
 def test_a_removed_module_shows_no_measurement_table(page: Any, plant: Running) -> None:
