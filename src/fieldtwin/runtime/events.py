@@ -145,6 +145,9 @@ class EventBus:
         self._link: Link | None = None  # the observers' process, when it runs
         self._taps: set[int] = set()  # wiretaps the process was told of
         self.remote = 0  # subscriptions and file writers the process holds
+        # the observers' process handles whole batches at once (never started): its
+        # subscribers are woken once a batch (``wake``), not once an event
+        self.deferred = False
 
     @property
     def active(self) -> bool:
@@ -248,7 +251,7 @@ class EventBus:
             return
         event = Event(t_us, kind, device, data)
         self.published += 1
-        inline = self._feed is None
+        inline = self._feed is None and not self.deferred
         for sub in subs:
             if sub.wants(event):
                 sub._put(event, inline)
@@ -289,6 +292,10 @@ class EventBus:
                 except Exception as exc:  # a decoder's bug: told, the plant runs on
                     self._failed(exc)
             self._wake_subscribers()  # a file writer drains its queue chunk by chunk
+
+    def wake(self) -> None:
+        """Wake the subscribers that got events since the last wake (``deferred``)."""
+        self._wake_subscribers()
 
     def _wake_subscribers(self, lost: int = 0) -> None:
         for sub in self._subs:

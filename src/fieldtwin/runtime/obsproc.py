@@ -37,6 +37,7 @@ class Observers:
 
     def __init__(self) -> None:
         self.bus = EventBus()  # never started: each record is handled at once
+        self.bus.deferred = True  # ... and the subscribers woken once a batch
         self.taps: dict[int, Wiretap] = {}
         self.subs: dict[int, tuple[Subscription, list[int]]] = {}  # number -> (sub, [told])
         self.writers: list[TraceWriter | PcapWriter] = []
@@ -57,6 +58,7 @@ class Observers:
                 if not self.failed:
                     self.failed = True
                     say(f"an observer failed ({exc!r}); said once")
+        bus.wake()
 
     def control(self, record: tuple[Any, ...]) -> None:
         op = record[0]

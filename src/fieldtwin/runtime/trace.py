@@ -20,6 +20,7 @@ from pathlib import Path
 
 from fieldtwin.errors import ConfigError
 from fieldtwin.runtime.events import Event, EventBus, Subscription
+from fieldtwin.runtime.obsrecords import plain_body
 
 TRACE_KINDS = ("modbus", "serial")
 BUFFER = 64 * 1024  # bytes the file buffers before it writes (and on close)
@@ -27,6 +28,25 @@ QUEUE = 10_000  # events the subscription holds (the writer drains it on every e
 
 Report = Callable[[str], None]
 _ENCODE = json.JSONEncoder(separators=(",", ":")).encode  # as json.dumps(..., separators)
+
+
+def line(event: Event, wall: str) -> str:
+    """``record(event, wall)`` as its JSON line (without the newline), ``wall`` given as
+    ``repr(round(wall, 6))``: the same text as json writes (``ensure_ascii``), by
+    orjson where it writes the same (fieldtwin.runtime.obsrecords.plain_body)."""
+    data = event.data
+    if "t" not in data and "wall" not in data:
+        body = plain_body(event.kind, event.device, data)
+        if body is not None and body.isascii() and b"\x7f" not in body:
+            return (
+                '{"t":'
+                + repr(round(event.t_us / 1e6, 6))
+                + ',"wall":'
+                + wall
+                + ","
+                + body[1:].decode()
+            )
+    return _ENCODE(record(event, float(wall)))
 
 
 def record(event: Event, wall: float) -> dict[str, object]:
@@ -72,10 +92,10 @@ class TraceWriter:
         sub, out = self._sub, self._file
         if sub is None or out is None:
             return
-        wall = self._wall()
+        wall = repr(round(self._wall(), 6))
         try:
             for event in sub.take():
-                out.write(_ENCODE(record(event, wall)) + "\n")
+                out.write(line(event, wall) + "\n")
                 self.written += 1
         except (OSError, ValueError) as exc:  # a full disk; a file closed under us
             self._fail(f"trace {self.path}: {getattr(exc, 'strerror', None) or exc}")
