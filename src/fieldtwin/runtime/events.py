@@ -55,6 +55,7 @@ CHUNK = 64  # records handled between two yields of the observers' thread
 YIELD_S = 0.0001  # a yield: long enough for the simulation's thread to take the interpreter
 SWITCH_S = 0.0005  # the interpreter's switch interval once started (Python's default: 5 ms)
 STOP_WAIT_S = 10.0  # close() waits this long for the observers' thread
+DECODED_KINDS = frozenset(("modbus", "register"))  # what a wiretap decodes the frames for
 Listener = Callable[[int, str, str, Mapping[str, object]], None]
 
 
@@ -68,8 +69,10 @@ class Subscription:
         devices: Collection[str] | None,
         maxlen: int,
         notify: Callable[[], None] | None,
+        raw: bool = False,
     ) -> None:
         self._bus = bus
+        self.raw = raw  # it reads a frame's bytes and where they went, never its fields
         self.kinds = frozenset(kinds) if kinds else None
         self.devices = frozenset(devices) if devices else None
         self._queue: deque[Event] = deque(maxlen=maxlen)
@@ -145,6 +148,9 @@ class EventBus:
         self._link: Link | None = None  # the observers' process, when it runs
         self._taps: set[int] = set()  # wiretaps the process was told of
         self.remote = 0  # subscriptions and file writers the process holds
+        # a subscription here wants the wire's frames decoded (``modbus`` fields, the
+        # ``register`` events): False while only ``raw`` ones (a pcap) take them
+        self.decoding = False
         # the observers' process handles whole batches at once (never started): its
         # subscribers are woken once a batch (``wake``), not once an event
         self.deferred = False
@@ -359,11 +365,15 @@ class EventBus:
         maxlen: int = DEFAULT_QUEUE,
         notify: Callable[[], None] | None = None,
         remote: bool = False,
+        raw: bool = False,
     ) -> Any:
         """A new subscription; ``notify`` is called when events came: on each event when
         the bus was not started, else once per batch from the observers' thread.
         ``remote``: filtered and encoded in the observers' process when it runs (its
-        ``texts()`` are what it sent; fieldtwin.runtime.obslink), here otherwise."""
+        ``texts()`` are what it sent; fieldtwin.runtime.obslink), here otherwise.
+        ``raw``: it reads only the bytes of the ``modbus`` events and where they went
+        (``hex``, ``dir``, ``conn``, ...): while no other subscription wants them, the
+        wiretaps skip decoding the frames' fields (a pcap's case)."""
         if maxlen < 1:
             raise ValueError("a subscription holds at least one event")
         with self._lock:
@@ -372,13 +382,21 @@ class EventBus:
             link = self.link if remote else None
             if link is not None:
                 return link.subscribe(kinds, devices, maxlen, notify)
-            sub = Subscription(self, kinds, devices, maxlen, notify)
+            sub = Subscription(self, kinds, devices, maxlen, notify, raw)
             self._subs = (*self._subs, sub)
+            self._decoding()
         return sub
 
     def _remove(self, sub: Subscription) -> None:
         with self._lock:
             self._subs = tuple(s for s in self._subs if s is not sub)
+            self._decoding()
+
+    def _decoding(self) -> None:
+        self.decoding = any(
+            not s.raw and (s.kinds is None or not s.kinds.isdisjoint(DECODED_KINDS))
+            for s in self._subs
+        )
 
 
 __all__ = [

@@ -9,7 +9,7 @@ a wiretap by its number and rebuilt from its ``spec()`` in the observers' proces
 from __future__ import annotations
 
 import json
-from collections.abc import Callable, Collection, Mapping
+from collections.abc import Callable, Collection, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -19,25 +19,43 @@ import orjson
 _ENCODE = json.JSONEncoder(separators=(",", ":"), ensure_ascii=False).encode
 _DUMPS = orjson.dumps
 
-# The kinds whose data hold only strings, integers, booleans, None and lists or dicts
-# of those, never a float (the wiretaps' and the character taps' own fields: the
-# property test tests/runtime/test_fast_json.py checks it over random traffic).  Their
-# JSON is written by orjson (a C encoder, about 15 times cheaper than json's), which
-# writes such values exactly as json does with ``ensure_ascii=False``; it writes some
-# floats differently (``0.00005`` for json's ``5e-05``), so the times are written
-# with ``repr`` as json writes them, and every other kind goes through json.
+# The kinds whose data are made of strings, integers, booleans, None and lists or
+# dicts of those, never a float (the wiretaps' and the character taps' own fields:
+# tests/trace/test_fast_json.py checks them over random traffic).  Their JSON is
+# written by orjson (a C encoder, about 15 times cheaper than json's), which writes
+# such values exactly as json does with ``ensure_ascii=False``; it writes some floats
+# differently (``0.00001`` for json's ``1e-05``), so the times are written with
+# ``repr`` as json writes them, and any other value, or kind, goes through json.
 PLAIN_KINDS = frozenset(("modbus", "serial", "connection", "register"))
-_FLOAT = float
+_PLAIN = frozenset((str, int, bool, type(None)))
+_NESTED = frozenset((list, tuple, dict))
+_ALLOWED = _PLAIN | _NESTED
+
+
+def _plain(values: Iterable[object]) -> bool:
+    """No value in ``values`` (nor in the lists and dicts among them) is other than a
+    string, an integer, a boolean or None."""
+    values = tuple(values)
+    types = set(map(type, values))
+    if types <= _PLAIN:
+        return True
+    if not types <= _ALLOWED:
+        return False
+    for value in values:
+        if type(value) in _NESTED and not _plain(
+            value.values() if isinstance(value, dict) else value  # type: ignore[arg-type]
+        ):
+            return False
+        if isinstance(value, dict) and not set(map(type, value)) <= {str}:
+            return False
+    return True
 
 
 def plain_body(kind: str, device: str, data: Mapping[str, object]) -> bytes | None:
     """``{"kind":…,"device":…,**data}`` as compact JSON by orjson when ``kind`` is a
-    plain kind and no value is a float; None: json must write it."""
-    if kind not in PLAIN_KINDS:
+    plain kind and every value plain; None: json must write it."""
+    if kind not in PLAIN_KINDS or not _plain(data.values()):
         return None
-    for value in data.values():
-        if type(value) is _FLOAT:
-            return None
     try:
         return _DUMPS({"kind": kind, "device": device, **data})
     except (TypeError, orjson.JSONEncodeError):  # a key not a string, an integer too big

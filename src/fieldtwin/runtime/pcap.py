@@ -162,7 +162,7 @@ class PcapWriter:
         self.failed: str | None = None
         self._lines: dict[str, int] = {}  # RTU lines, numbered in order of first traffic
         self._sub: Subscription | None = bus.subscribe(
-            ("modbus", KIND_CONNECTION), maxlen=QUEUE, notify=self._drain
+            ("modbus", KIND_CONNECTION), maxlen=QUEUE, notify=self._drain, raw=True
         )
 
     def _drain(self) -> None:

@@ -154,6 +154,7 @@ class Stream:
             self._publish(now, IN, None, {"error": str(exc), "hex": data[:260].hex()})
             return
         whole = len(frames) == 1 and len(data) == 7 + len(frames[0].pdu)  # the usual chunk
+        decode = self.tap.bus.decoding
         for frame in frames:
             raw = (
                 data
@@ -161,9 +162,10 @@ class Stream:
                 else mbap_bytes(frame.transaction, frame.protocol, frame.unit, frame.pdu)
             )
             fields: dict[str, object] = {"transaction": frame.transaction, "hex": raw.hex()}
-            fields.update(request_items(frame.pdu))
-            fields["tes"] = self.tap.outcomes(frame.unit, frame.pdu, False, self._states)
-            self._remember(frame.transaction, frame.unit, fields, frame.pdu)
+            if decode:
+                fields.update(request_items(frame.pdu))
+                fields["tes"] = self.tap.outcomes(frame.unit, frame.pdu, False, self._states)
+                self._remember(frame.transaction, frame.unit, fields, frame.pdu)
             self._publish(now, IN, frame.unit, fields)
 
     def _tcp_out(self, data: bytes, now: int) -> None:
@@ -171,6 +173,9 @@ class Stream:
             return
         transaction, unit, pdu = (data[0] << 8) | data[1], data[6], data[7:]
         fields: dict[str, object] = {"transaction": transaction, "hex": data.hex()}
+        if not self.tap.bus.decoding:  # only the bytes are wanted (a pcap)
+            self._publish(now, OUT, unit, fields)
+            return
         write = self._pending.get(transaction, _NOTHING)[2]
         fields.update(self._reply(transaction, unit, pdu))
         self._publish(now, OUT, unit, fields)
@@ -193,6 +198,9 @@ class Stream:
                 continue
             slave, pdu = event.slave, event.pdu
             fields = {"crc": "good", "hex": event.data.hex()}
+            if not self.tap.bus.decoding:  # only the bytes are wanted (a pcap)
+                self._publish(event.at, IN, slave, fields)
+                continue
             fields.update(request_items(pdu))
             fields["tes"] = self.tap.outcomes(slave, pdu, True, self._states)
             self._remember(slave, slave, fields, pdu)
@@ -205,6 +213,9 @@ class Stream:
             return
         slave = data[0]
         fields: dict[str, object] = {"crc": "good" if crc_ok(data) else "bad", "hex": data.hex()}
+        if not self.tap.bus.decoding:  # only the bytes are wanted (a pcap)
+            self._publish(now, OUT, slave, fields)
+            return
         write = self._pending.get(slave, _NOTHING)[2]
         fields.update(self._reply(slave, slave, data[1:-2]))
         self._publish(now, OUT, slave, fields)
