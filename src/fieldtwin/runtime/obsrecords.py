@@ -71,9 +71,12 @@ def event_json(t_us: int, kind: str, device: str, data: Mapping[str, object]) ->
     return '{"t_s":' + repr(t_us / 1e6) + "," + body[1:].decode()
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class Event:
-    """One thing that happened: when (simulated us), what kind, on which device, its fields."""
+    """One thing that happened: when (simulated us), what kind, on which device, its fields.
+
+    Treated as a value, never changed once made (not a frozen dataclass only because a
+    frozen one's ``__init__`` costs three times as much, once per frame observed)."""
 
     t_us: int
     kind: str  # "modbus", "serial", "object", "led", "dem", "register", "clock", ...

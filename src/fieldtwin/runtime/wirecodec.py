@@ -105,10 +105,19 @@ def reply_fields(pdu: bytes) -> dict[str, object]:
     """Function and exception code of a reply PDU."""
     if not pdu:
         return {"function": None, "function_name": "empty"}
-    out: dict[str, object] = {"function": pdu[0] & 0x7F, "function_name": function_name(pdu[0])}
-    if pdu[0] & EXCEPTION_FLAG and len(pdu) > 1:
-        out["exception"] = pdu[1]
-    return out
+    function = pdu[0]
+    return dict(
+        _reply_items(function, pdu[1] if function & EXCEPTION_FLAG and len(pdu) > 1 else None)
+    )
+
+
+@lru_cache(maxsize=512)
+def _reply_items(function: int, exception: int | None) -> tuple[tuple[str, object], ...]:
+    """``reply_fields`` of a reply's function code and exception code, remembered."""
+    out: dict[str, object] = {"function": function & 0x7F, "function_name": function_name(function)}
+    if exception is not None:
+        out["exception"] = exception
+    return tuple(out.items())
 
 
 def device_name(device: SlaveDevice) -> str:
