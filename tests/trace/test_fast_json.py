@@ -75,3 +75,16 @@ def test_a_float_or_another_kind_goes_through_json() -> None:
         event_json(50, "modbus", "d", {"x": 1})
         == '{"t_s":5e-05,"kind":"modbus","device":"d","x":1}'
     )
+
+
+@settings(max_examples=EXAMPLES, deadline=None)
+@given(
+    item=st.lists(scalars | st.binary(max_size=20) | st.floats(allow_nan=False), max_size=6),
+    kind=st.sampled_from(["data", "send", "result", "end"]),
+)
+def test_a_recordings_line_is_written_as_json_writes_it(item: list[object], kind: str) -> None:
+    from fieldtwin.runtime.recwriter import _line, _plain
+
+    record = [kind, *item]
+    text = json.dumps(record, separators=(",", ":"), ensure_ascii=False, default=_plain)
+    assert _line(record) == text.encode("utf-8") + b"\n"

@@ -19,6 +19,8 @@ from collections.abc import Collection, Generator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+import orjson
+
 from fieldtwin import __version__
 from fieldtwin.errors import ConfigError
 from fieldtwin.runtime.recfile import (
@@ -35,6 +37,9 @@ from fieldtwin.runtime.recstream import records as numbered_records
 QUEUE = 50_000  # records handed to the writer and not yet written: past it the plant waits
 WRITE_BATCH = 2000  # records the writer's thread turns into one compressed write
 WRITE_S = 0.01  # the writer's thread takes what was queued this often
+# gzip's fastest level: a recording is written while the plant runs (level 6 cost the
+# writer's thread three times the CPU for files about a quarter smaller)
+COMPRESS = 1
 
 
 @dataclass(frozen=True, slots=True)
@@ -108,7 +113,9 @@ class RecordWriter:
                 f" {MAX_HEADER_BYTES // MiB} MiB (docs/record.md)"
             )
         try:
-            self._file: gzip.GzipFile | None = gzip.GzipFile(self.path, "wb", compresslevel=6)
+            self._file: gzip.GzipFile | None = gzip.GzipFile(
+                self.path, "wb", compresslevel=COMPRESS
+            )
         except OSError as exc:
             raise ConfigError(f"--record {path}: cannot write ({exc.strerror})") from None
         self.records = 0
@@ -177,8 +184,29 @@ class RecordWriter:
 
 
 def _line(item: object) -> bytes:
+    if type(item) is list and item and item[0] in _HOT and set(map(type, item)) <= _PLAIN:
+        try:
+            return _DUMPS(item, default=_hex, option=_NEWLINE)
+        except (TypeError, orjson.JSONEncodeError):
+            pass
     text = json.dumps(item, separators=(",", ":"), ensure_ascii=False, default=_plain)
     return text.encode("utf-8") + b"\n"
+
+
+# The records of the wire, one per chunk in and out (``data``, ``send``: a kind, times,
+# a key and bytes): written by orjson, as json writes them (strings, integers, the
+# bytes as hex by ``_hex``), at a fraction of the cost; a float, which orjson may write
+# differently, or anything else goes through json.
+_HOT = frozenset(("data", "send"))
+_PLAIN = frozenset((str, int, bytes))
+_DUMPS = orjson.dumps
+_NEWLINE = orjson.OPT_APPEND_NEWLINE
+
+
+def _hex(value: object) -> str:
+    if isinstance(value, bytes | bytearray | memoryview):
+        return bytes(value).hex()
+    raise TypeError  # not bytes: json writes it
 
 
 def _plain(value: object) -> object:
