@@ -347,7 +347,7 @@ def _cpu_us(run: dict[str, Any]) -> float | None:
         run["cpu"]["server_core_frac"],
         run.get("requests", 0) + run.get("warmup_done", 0),
     )
-    if frac is None or not served:
+    if not frac or not served:  # the kit could not read the server's CPU (it reads 0)
         return None
     return float(frac) * float(run["wall_s"]) / served * 1e6
 
