@@ -78,10 +78,25 @@ def serve(door: Door, control: object, console: Handler | None = None) -> Callab
 
 class _LoopReplies:
     """The answers of one turn of the runner, handed to the web server's loop in one
-    call (``Replies``): one wakeup of that loop per turn, not one per command."""
+    call (``Replies``): one wakeup of that loop per turn, not one per command.  The
+    other way, the runner is woken once per round of the loop: the commands the loop
+    submits while it handles the requests that came together wait for the end of the
+    round, and the runner takes them in one turn."""
 
-    def __init__(self, loop: asyncio.AbstractEventLoop) -> None:
+    def __init__(self, loop: asyncio.AbstractEventLoop, inbox: Inbox) -> None:
         self.loop = loop
+        self.inbox = inbox
+        self._waking = False  # a wakeup of the runner is due at the end of this round
+
+    def submitted(self, wake: bool) -> None:
+        """A command was submitted; ``wake``: the runner must be woken for it."""
+        if wake and not self._waking:
+            self._waking = True
+            self.loop.call_soon(self._wake)
+
+    def _wake(self) -> None:
+        self._waking = False
+        self.inbox.wake()
 
     def answer(self, answers: list[Answer]) -> None:
         with contextlib.suppress(RuntimeError):  # the loop has closed: nobody waits
@@ -189,11 +204,11 @@ class Sim:
         loop = asyncio.get_running_loop()
         replies, deadlines = self._replies, self._deadlines
         if replies is None or deadlines is None or replies.loop is not loop:
-            replies, deadlines = _LoopReplies(loop), _Deadlines(loop, self.inbox)
+            replies, deadlines = _LoopReplies(loop, self.inbox), _Deadlines(loop, self.inbox)
             self._replies, self._deadlines = replies, deadlines
         future: asyncio.Future[Any] = loop.create_future()
         ticket = Ticket(replies, future)
-        self.inbox.submit_ticket(run, ticket, then)
+        replies.submitted(self.inbox.submit_ticket(run, ticket, then, wake=False))
         deadlines.watch(ticket, future, wait_s)
         try:
             return await future

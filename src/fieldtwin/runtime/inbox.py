@@ -33,6 +33,7 @@ from fieldtwin.runtime.door import Command, Door
 
 T = TypeVar("T")
 MAX_PENDING = 256  # commands waiting for the runner before submit refuses
+WAKEUPS_READ = 4096  # bytes of wakeups taken by one read (one byte per wakeup)
 
 
 class InboxFull(FieldtwinError):
@@ -114,13 +115,23 @@ class Inbox:
         run: Callable[[], Any] | Command,
         ticket: Ticket,
         then: Callable[[Any], Any] | None = None,
-    ) -> None:
+        *,
+        wake: bool = True,
+    ) -> bool:
         """From any thread: ``run`` (a reading function, or a command for the door) on
         the simulation's thread; its answer goes to ``ticket.replies`` with the turn's
-        others (``then(answer)`` when given, read in the same turn)."""
+        others (``then(answer)`` when given, read in the same turn).  With ``wake`` False
+        the runner is not woken here: True is returned when it must be, by ``wake()``
+        (an event loop wakes it once for all it submitted in one round)."""
         if isinstance(run, Command) and self.door is None:
             raise ValueError("this inbox has no door to run commands")
-        self._submit(_Command(run, ticket, then))
+        return self._submit(_Command(run, ticket, then), wake)
+
+    def wake(self) -> None:
+        """From any thread: the runner looks at the inbox (a wakeup deferred by
+        ``submit_ticket(..., wake=False)``)."""
+        with contextlib.suppress(BlockingIOError, OSError):  # full of wakeups, or closed
+            self._writer.send(b"\0")
 
     def withdraw(self, ticket: Ticket) -> bool:
         """From any thread: ``ticket``'s command will not run, if its turn has not come
@@ -131,7 +142,7 @@ class Inbox:
             ticket.withdrawn = True
             return True
 
-    def _submit(self, item: _Command) -> None:
+    def _submit(self, item: _Command, wake_now: bool = True) -> bool:
         with self._lock:
             if self.closed:
                 raise InboxClosed("the simulation has stopped")
@@ -141,9 +152,10 @@ class Inbox:
             # queue after it drains the wakeups: this one is taken in the same turn
             wake = not self._queue
             self._queue.append(item)
-        if wake:
+        if wake and wake_now:
             with contextlib.suppress(BlockingIOError):  # full of wakeups already: it will look
                 self._writer.send(b"\0")
+        return wake
 
     def __len__(self) -> int:
         return len(self._queue)
@@ -216,11 +228,10 @@ class Inbox:
         return bool(ready) or bool(self._queue)
 
     def _drain_wakeups(self) -> None:
-        try:
-            while self._reader.recv(4096):
-                pass
-        except (BlockingIOError, OSError):
-            pass
+        # one read takes every wakeup (one is sent per empty queue, so a few at most);
+        # a wakeup sent after it leaves the descriptor readable: one more turn, harmless
+        with contextlib.suppress(BlockingIOError, OSError):
+            self._reader.recv(WAKEUPS_READ)
 
     def close(self) -> None:
         """No more commands; those still waiting fail with InboxClosed."""
