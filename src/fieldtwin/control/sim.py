@@ -119,14 +119,17 @@ class _Deadlines:
     deadlines come in order) watched by one timer, a longer or shorter wait by a timer
     of its own."""
 
-    def __init__(self, loop: asyncio.AbstractEventLoop, inbox: Inbox) -> None:
+    def __init__(
+        self, loop: asyncio.AbstractEventLoop, inbox: Inbox, queued_s: float = DEFAULT_WAIT_S
+    ) -> None:
         self.loop = loop
         self.inbox = inbox
+        self.queued_s = queued_s  # the wait of the requests in the queue
         self._queue: deque[tuple[float, Ticket, asyncio.Future[Any]]] = deque()
         self._timer: asyncio.TimerHandle | None = None
 
     def watch(self, ticket: Ticket, future: asyncio.Future[Any], wait_s: float) -> None:
-        if wait_s != DEFAULT_WAIT_S:
+        if wait_s != self.queued_s:
             timer = self.loop.call_later(wait_s, self._expire, ticket, future, wait_s)
             future.add_done_callback(lambda _: timer.cancel())
             return
@@ -142,7 +145,7 @@ class _Deadlines:
         queue, now = self._queue, self.loop.time()
         while queue and (queue[0][2].done() or queue[0][0] <= now):
             _, ticket, future = queue.popleft()
-            self._expire(ticket, future, DEFAULT_WAIT_S)
+            self._expire(ticket, future, self.queued_s)
         if queue:
             self._timer = self.loop.call_at(queue[0][0], self._sweep)
 
@@ -162,8 +165,9 @@ class _Deadlines:
 class Sim:
     """Hands commands to the simulation's thread and waits for their results."""
 
-    def __init__(self, inbox: Inbox) -> None:
+    def __init__(self, inbox: Inbox, default_wait_s: float = DEFAULT_WAIT_S) -> None:
         self.inbox = inbox
+        self.default_wait_s = default_wait_s  # the wait most requests take (one timer)
         # the web server's loop's replies and deadlines (made again for another loop)
         self._replies: _LoopReplies | None = None
         self._deadlines: _Deadlines | None = None
@@ -204,7 +208,10 @@ class Sim:
         loop = asyncio.get_running_loop()
         replies, deadlines = self._replies, self._deadlines
         if replies is None or deadlines is None or replies.loop is not loop:
-            replies, deadlines = _LoopReplies(loop, self.inbox), _Deadlines(loop, self.inbox)
+            replies, deadlines = (
+                _LoopReplies(loop, self.inbox),
+                _Deadlines(loop, self.inbox, self.default_wait_s),
+            )
             self._replies, self._deadlines = replies, deadlines
         future: asyncio.Future[Any] = loop.create_future()
         ticket = Ticket(replies, future)
