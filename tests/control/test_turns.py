@@ -13,8 +13,10 @@ from typing import Any
 
 import pytest
 
+from fieldtwin.clock import MS, SimClock
 from fieldtwin.control.sim import CommandTimeout, Sim
 from fieldtwin.runtime.inbox import Answer, Inbox, InboxClosed, Ticket
+from fieldtwin.runtime.runner import Runner
 
 
 class Kept:
@@ -118,4 +120,27 @@ def test_a_request_not_taken_in_time_answers_504_and_its_command_never_runs(
         asyncio.run(both())
     inbox.run_pending()
     assert ran == [] and inbox.executed == 1  # withdrawn before its turn
+    inbox.close()
+
+
+def test_a_command_that_runs_the_clock_lets_the_answers_before_it_leave_first() -> None:
+    """The answers of a turn wait for its end, except behind a command that runs the clock
+    (a console exchange): those before it leave when it starts."""
+    clock = SimClock()
+    runner = Runner(clock, None)
+    inbox = Inbox()
+    runner.take_commands(inbox)
+    kept = Kept()
+    seen_during: list[int] = []
+
+    def long() -> str:
+        runner.step(5 * MS)  # a nested run of the clock, inside the command
+        seen_during.append(len(kept.turns))
+        return "long"
+
+    inbox.submit_ticket(lambda: "quick", Ticket(kept, "quick"))
+    inbox.submit_ticket(long, Ticket(kept, "long"))
+    runner.step(1 * MS)  # the runner's cycle takes the turn
+    assert seen_during == [1]  # "quick" had left before "long" ended
+    assert [[key for key, _, _ in turn] for turn in kept.turns] == [["quick"], ["long"]]
     inbox.close()

@@ -88,6 +88,7 @@ class Inbox:
         self._lock = threading.Lock()
         self.closed = False
         self.executed = 0  # commands run so far
+        self._turn: dict[Replies, list[Answer]] | None = None  # the answers of the turn
 
     def fileno(self) -> int:
         """Readable while commands are pending (the runner watches it)."""
@@ -171,6 +172,7 @@ class Inbox:
                 if isinstance(command.future, Ticket):
                     command.future.taken = True
         answers: dict[Replies, list[Answer]] = {}
+        self._turn = answers
         done = 0
         try:
             for command in commands:
@@ -200,9 +202,21 @@ class Inbox:
                     answers.setdefault(future.replies, []).append((future.key, None, stopped))
                 elif future.set_running_or_notify_cancel():
                     future.set_exception(stopped)
+            self._turn = None
             for replies, given in answers.items():
                 replies.answer(given)
         return len(commands)
+
+    def flush(self) -> None:
+        """On the simulation's thread, inside a turn: the answers of the turn so far leave
+        now (a command that runs the clock would hold them until it ends)."""
+        turn = self._turn
+        if not turn:
+            return
+        given = list(turn.items())
+        turn.clear()
+        for replies, answers in given:
+            replies.answer(answers)
 
     def _run(self, command: _Command) -> tuple[Any, BaseException | None]:
         """A command's answer or what it raised (the requester gets it; an Exception
