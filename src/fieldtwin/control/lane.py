@@ -5,7 +5,7 @@
 loop.  Through the whole stack a request passes three gates (fieldtwin.control.guards),
 FastAPI's middleware, router, dependency solving and two validations: about 0.6 ms
 of CPU for a command whose own work is a few tens of microseconds (docs/performance.md,
-"The control API's PUT: a fast lane").  The lane answers the *happy path* of those
+"The control API's PUT: a lane and turns").  The lane answers the *happy path* of those
 routes by itself, and only it: a request the gates would pass unchanged, a path whose
 route is one of the lane's (the very route the router would pick), a JSON body the
 route's own model takes.  Everything else - no or a wrong token, a Host, Origin or
