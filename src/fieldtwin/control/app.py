@@ -27,8 +27,9 @@ from fieldtwin import __version__
 from fieldtwin.control.dashboard import add_dashboard, add_docs
 from fieldtwin.control.document import allowed_methods, bodyless, declare, routed
 from fieldtwin.control.guards import BodyLimit, BrowserGate, TokenGate, origin_of
+from fieldtwin.control.lane import FastLane
 from fieldtwin.control.resources import Conflict, Control, NotFound
-from fieldtwin.control.routers import GROUPS
+from fieldtwin.control.routers import GROUPS, LANE
 from fieldtwin.control.routers.common import Hop
 from fieldtwin.control.sim import CommandTimeout, Sim
 from fieldtwin.control.stream import add_stream
@@ -154,10 +155,12 @@ def create_app(
     token: str | None = None,
     host: str | None = None,
     allow_origins: Sequence[str] = (),
+    lane: bool = True,
 ) -> Any:
     """The ASGI application: the routes inside the token gate, the browser's doors
     (Host, Origin, JSON bodies: ``host`` is the configured listening host) and the
-    body limit (fieldtwin.control.guards)."""
+    body limit (fieldtwin.control.guards); in front, the fast lane of the hot command
+    routes (fieldtwin.control.lane; ``lane=False``: without it)."""
     app = FastAPI(
         docs_url=None,
         redoc_url=None,
@@ -184,7 +187,8 @@ def create_app(
     add_dashboard(app)
     add_docs(app)
     declare(app, token=token is not None)
-    inner: Any = TokenGate(app, token)
+    gate = TokenGate(app, token)
+    inner: Any = gate
     origins = [o for o in map(origin_of, allow_origins) if o]
     if origins:  # a page of an allowed origin may call the API (its preflights answered)
         inner = CORSMiddleware(
@@ -196,7 +200,10 @@ def create_app(
     doors = BrowserGate(
         inner, host=host, allow_origins=origins, bodyless=bodyless(app), routed=routed(app)
     )
-    return BodyLimit(doors)
+    gated = BodyLimit(doors)
+    if not lane:
+        return gated
+    return FastLane(gated, app, sim, LANE, doors=doors, token=gate)
 
 
 __all__ = ["create_app"]

@@ -113,7 +113,7 @@ class TokenGate:
         server = scope.get("server") or ("", 0)
         return f"{COOKIE}_{server[1]}"
 
-    def _given(self, scope: Scope) -> tuple[str | None, bool]:
+    def given(self, scope: Scope) -> tuple[str | None, bool]:
         """The token given, and whether it came in the URL of the page (to be kept)."""
         cookie_name = self.cookie_name(scope).encode()
         for key, value in scope.get("headers", []):
@@ -139,7 +139,7 @@ class TokenGate:
         if self.token is None or scope["type"] not in ("http", "websocket"):
             await self.app(scope, receive, send)
             return
-        given, keep = self._given(scope)
+        given, keep = self.given(scope)
         if given is not None and secrets.compare_digest(given.encode(), self.token.encode()):
             if not keep:
                 await self.app(scope, receive, send)
@@ -248,7 +248,7 @@ class BrowserGate:
             self._kinds[key] = found
         return found
 
-    def _host_ok(self, host: str | None) -> bool:
+    def host_ok(self, host: str | None) -> bool:
         if self.any_host:  # bound to every interface: the token guards it (a documented choice)
             return True
         if host is None:
@@ -311,7 +311,7 @@ class BrowserGate:
     def _refusal(
         self, scope: Scope, headers: dict[bytes, str], host: str | None, method: str, ws: bool
     ) -> tuple[int, dict[str, object]] | None:
-        if not self._host_ok(host):
+        if not self.host_ok(host):
             extra = self.host and not loopback_host(self.host)
             allowed = "localhost, 127.0.0.1, [::1]" + (f", {self.host}" if extra else "")
             return 400, {

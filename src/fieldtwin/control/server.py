@@ -84,15 +84,18 @@ class ControlServer:
         token: str | None,
         *,
         allow_origins: Sequence[str] = (),
+        lane: bool = True,
     ) -> None:
         self.control = control
         self.inbox = inbox
         self.token = token
         self._socket = sock
         host = sock.getsockname()[0]
-        app = create_app(control, Sim(inbox), token=token, host=host, allow_origins=allow_origins)
+        self.app = create_app(
+            control, Sim(inbox), token=token, host=host, allow_origins=allow_origins, lane=lane
+        )
         config = uvicorn.Config(
-            app,
+            self.app,
             log_level="warning",
             lifespan="off",
             access_log=False,

@@ -275,6 +275,8 @@ class Runner:
         return self._stopping
 
     def _run(self, end: int | None, predicate: Callable[[], bool] | None) -> None:
+        if self._in_command and self._inbox is not None:
+            self._inbox.flush()  # a command runs the clock: its turn's answers so far leave
         outer = self._predicate
         self._predicate = predicate
         pace = self._tempo.begin(self._wall.monotonic(), self.clock.now, self.speed or 1.0)

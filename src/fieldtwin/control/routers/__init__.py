@@ -22,5 +22,7 @@ from fieldtwin.control.routers import (
 )
 
 GROUPS = (plant, clock, devices, faults, objects, plc, scenarios, console, dashboard, tags)
+# the hot command routes the fast lane answers on their happy path (fieldtwin.control.lane)
+LANE = (devices.SET_INPUT, objects.WRITE_OBJECT)
 
-__all__ = ["GROUPS"]
+__all__ = ["GROUPS", "LANE"]

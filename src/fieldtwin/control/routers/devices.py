@@ -4,9 +4,19 @@ from __future__ import annotations
 
 from fastapi import APIRouter
 
+from fieldtwin.control.lane import LaneRoute
 from fieldtwin.control.replies import InputJson, InputSet, Leds, OutputJson, PowerCycled, StatusJson
 from fieldtwin.control.routers.common import REPLY, Hop
 from fieldtwin.control.schemas import InputBody, PowerCycleBody
+
+# set an input: the route below and the fast lane in front of the router (control/lane.py)
+SET_INPUT: LaneRoute[InputBody, InputSet] = LaneRoute(
+    "PUT",
+    "/devices/{ident}/inputs/{name}",
+    InputBody,
+    lambda at, body: ("set_input", (at["ident"], at["name"], body.value, body.signal)),
+    InputSet.model_validate,
+)
 
 
 def router(hop: Hop) -> APIRouter:
@@ -32,8 +42,8 @@ def router(hop: Hop) -> APIRouter:
 
     @api.put("/inputs/{name}", summary="set an input, or drive it by a signal", **REPLY)
     async def set_input(ident: str, name: str, body: InputBody) -> InputSet:
-        done = await hop.do("set_input", ident, name, body.value, body.signal)
-        return InputSet.model_validate(done)
+        command, args = SET_INPUT.call({"ident": ident, "name": name}, body)
+        return SET_INPUT.reply(await hop.do(command, *args))
 
     @api.get(
         "/outputs",
@@ -59,4 +69,4 @@ def router(hop: Hop) -> APIRouter:
     return api
 
 
-__all__ = ["router"]
+__all__ = ["SET_INPUT", "router"]

@@ -1,0 +1,291 @@
+"""A fast lane for the hot command routes, in front of the gates and FastAPI's router.
+
+``PUT /devices/{ident}/inputs/{name}`` and ``PUT /devices/{ident}/objects/{name}``
+(an input, a PL7 object or a TES register) are what a test or an HMI sends in a
+loop.  Through the whole stack a request passes three gates (fieldtwin.control.guards),
+FastAPI's middleware, router, dependency solving and two validations: about 0.6 ms
+of CPU for a command whose own work is a few tens of microseconds (docs/performance.md,
+"The control API's PUT: a lane and turns").  The lane answers the *happy path* of those
+routes by itself, and only it: a request the gates would pass unchanged, a path whose
+route is one of the lane's (the very route the router would pick), a JSON body the
+route's own model takes.  Everything else - no or a wrong token, a Host, Origin or
+Sec-Fetch-Site header, another Content-Type, a body over the bound or one that does
+not fit, an unknown path - falls through, with the body it read handed on unchanged,
+to the whole stack, which stays the documented and reference route (the OpenAPI
+document is the routers').
+
+On the lane the command is the same value through the same door
+(``Sim.command``: the inbox, the runner's one dispatcher, the recording, the
+snapshot made stale before the answer); the answer is the route's own reply model
+serialized by the route's own response field (FastAPI's ``exclude_unset``), with the
+security headers the gates add; an error the command raises gets the app's own
+exception handler (404, 409, 400, 503, 504), as through the router.
+tests/control/test_lane.py sends the same random requests to an app with the lane
+and one without and finds the same answers and the same recorded commands.
+"""
+
+from __future__ import annotations
+
+import inspect
+import secrets
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any, Generic, TypeVar
+
+from fastapi import FastAPI
+from fastapi.routing import APIRoute
+from pydantic import BaseModel, TypeAdapter, ValidationError
+from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.requests import Request
+from starlette.routing import Match
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
+
+from fieldtwin.control.guards import MAX_BODY, SECURITY_HEADERS, BrowserGate, TokenGate
+from fieldtwin.control.sim import Sim
+
+PATHS_KEPT = 1024  # paths whose route the lane remembers; then forgotten (bounded)
+JSON_TYPES = frozenset({b"application/json", b"application/json; charset=utf-8"})
+Call = tuple[str, tuple[object, ...]]
+
+
+B = TypeVar("B", bound=BaseModel)
+R = TypeVar("R", bound=BaseModel)
+
+
+@dataclass(frozen=True)
+class LaneRoute(Generic[B, R]):
+    """One route the lane may answer: its method and path as the router declares them,
+    its body's model, the command it runs (from the path's parameters and the body) and
+    the route's answer made from the command's.  The router's endpoint uses the same
+    ``call`` and ``reply``: the two ways cannot drift apart."""
+
+    method: str
+    path: str
+    body: type[B]
+    call: Callable[[Mapping[str, Any], B], Call]
+    reply: Callable[[Any], R]
+
+
+@dataclass(frozen=True)
+class _Way:
+    """A lane route bound to the app's route of the same path and method."""
+
+    lane: LaneRoute[Any, Any]
+    route: APIRoute
+    body: TypeAdapter[Any]
+
+
+_NONE = object()  # a path remembered as not the lane's
+
+
+class FastLane:
+    """ASGI: the lane's routes answered here on their happy path; every other request,
+    and any doubt, goes to ``app`` (the gates around FastAPI) as it came."""
+
+    def __init__(
+        self,
+        app: ASGIApp,
+        api: FastAPI,
+        sim: Sim,
+        routes: Sequence[LaneRoute[Any, Any]],
+        *,
+        doors: BrowserGate,
+        token: TokenGate,
+    ) -> None:
+        self.app = app
+        self.api = api
+        self.sim = sim
+        self.doors = doors
+        self.token = token
+        self._ways: dict[int, _Way] = {}  # by id of the app's route
+        for lane in routes:
+            route = _route(api, lane)
+            self._ways[id(route)] = _Way(lane, route, TypeAdapter(lane.body))
+        self.methods = frozenset(lane.method for lane in routes)
+        # (the route's way, its path parameters) by (method, root path, path), or _NONE
+        self._paths: dict[tuple[str, str, str], tuple[_Way, dict[str, Any]] | object] = {}
+        self.answered = 0  # requests the lane answered (the rest fell through)
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http" or scope["method"] not in self.methods:
+            await self.app(scope, receive, send)
+            return
+        found = self._way(scope)
+        if found is _NONE or not self._admitted(scope):
+            await self.app(scope, receive, send)
+            return
+        assert isinstance(found, tuple)
+        way, params = found
+        read: list[Message] = []
+        body = await _body(receive, read)
+        model = None
+        if body is not None:
+            try:
+                model = way.body.validate_json(body)
+            except ValidationError:
+                model = None
+        if model is None:  # over the bound, cut short, or not the route's body: the stack's
+            await self.app(scope, _replay(read, receive), send)
+            return
+        self.answered += 1
+        name, args = way.lane.call(params, model)
+        try:
+            answer = way.lane.reply(await self.sim.command(name, *args))
+            data = _serialized(way.route, answer)
+        except Exception as exc:
+            handler = _handler(self.api, exc)
+            if handler is None:
+                raise
+            response = handler(Request(scope, receive), exc)
+            if inspect.isawaitable(response):
+                response = await response
+            await response(scope, receive, _secured(send))
+            return
+        status = way.route.status_code or 200
+        await send(
+            {
+                "type": "http.response.start",
+                "status": status,
+                "headers": [
+                    (b"content-length", str(len(data)).encode()),
+                    (b"content-type", b"application/json"),
+                    *SECURITY_HEADERS,
+                ],
+            }
+        )
+        await send({"type": "http.response.body", "body": data})
+
+    def _way(self, scope: Scope) -> tuple[_Way, dict[str, Any]] | object:
+        """The lane's way for this request if the router would take it to one of the
+        lane's routes (the first route that fully matches, as Starlette's router picks)."""
+        key = (scope["method"], scope.get("root_path", ""), scope["path"])
+        found = self._paths.get(key)
+        if found is None:
+            found = _NONE
+            for route in self.api.router.routes:
+                match, child = route.matches(scope)
+                if match is Match.FULL:
+                    way = self._ways.get(id(route))
+                    if way is not None:
+                        found = (way, dict(child.get("path_params", {})))
+                    break
+            if len(self._paths) >= PATHS_KEPT:
+                self._paths.clear()
+            self._paths[key] = found
+        return found
+
+    def _admitted(self, scope: Scope) -> bool:
+        """The gates would let this request through unchanged: every header they look
+        at given once, the Host this plant's, no Origin nor Sec-Fetch-Site (a browser's
+        request: the whole stack judges it, CORS included), a JSON Content-Type, a
+        declared length within the bound, and the token when one is set."""
+        headers: dict[bytes, bytes] = {}
+        raw = scope["headers"]
+        for key, value in raw:
+            headers[key] = value
+        if len(headers) != len(raw):
+            return False  # a header given twice: let the gates judge it
+        host = headers.get(b"host")
+        if host is None or not self.doors.host_ok(host.decode("latin-1")):
+            return False
+        if b"origin" in headers or b"sec-fetch-site" in headers:
+            return False
+        kind = headers.get(b"content-type")
+        if kind is None or kind.strip().lower() not in JSON_TYPES:
+            return False
+        length = headers.get(b"content-length")
+        if length is not None and not (length.isdigit() and int(length) <= MAX_BODY):
+            return False
+        if self.token.token is None:
+            return True
+        given, keep = self.token.given(scope)
+        return (
+            given is not None
+            and not keep
+            and secrets.compare_digest(given.encode(), self.token.token.encode())
+        )
+
+
+def _route(api: FastAPI, lane: LaneRoute[Any, Any]) -> APIRoute:
+    for route in api.router.routes:
+        if (
+            isinstance(route, APIRoute)
+            and route.path_format == lane.path
+            and lane.method in (route.methods or ())
+        ):
+            return route
+    raise ValueError(f"no route {lane.method} {lane.path} for the fast lane")
+
+
+async def _body(receive: Receive, read: list[Message]) -> bytes | None:
+    """The whole body, each message kept in ``read``; None when the connection ended
+    first or the body passed the bound (the stack says what then)."""
+    chunks: list[bytes] = []
+    size = 0
+    while True:
+        message = await receive()
+        read.append(message)
+        if message["type"] != "http.request":
+            return None
+        chunk = message.get("body", b"")
+        size += len(chunk)
+        if size > MAX_BODY:
+            return None
+        chunks.append(chunk)
+        if not message.get("more_body", False):
+            return b"".join(chunks)
+
+
+def _replay(read: list[Message], then: Receive) -> Receive:
+    """What the lane read, message by message, then what the connection says."""
+    pending = list(read)
+
+    async def receive() -> Message:
+        if pending:
+            return pending.pop(0)
+        return await then()
+
+    return receive
+
+
+def _serialized(route: APIRoute, content: Any) -> bytes:
+    """The answer as the route's response field writes it (FastAPI's serialize_response:
+    validated into the model, then dumped with the route's options)."""
+    field = route.response_field
+    assert field is not None
+    value, errors = field.validate(content, {}, loc=("response",))
+    if errors:
+        raise ValueError(f"the answer does not fit {route.path}'s model: {errors}")
+    data: bytes = field.serialize_json(
+        value,
+        include=route.response_model_include,
+        exclude=route.response_model_exclude,
+        by_alias=route.response_model_by_alias,
+        exclude_unset=route.response_model_exclude_unset,
+        exclude_defaults=route.response_model_exclude_defaults,
+        exclude_none=route.response_model_exclude_none,
+    )
+    return data
+
+
+def _handler(api: FastAPI, exc: Exception) -> Callable[[Request, Exception], Any] | None:
+    """The app's handler of this exception (by its class's MRO, as Starlette looks)."""
+    if isinstance(exc, StarletteHTTPException):
+        return None
+    for kind in type(exc).__mro__:
+        handler = api.exception_handlers.get(kind)
+        if handler is not None:
+            return handler
+    return None
+
+
+def _secured(send: Send) -> Send:
+    async def secured(message: Message) -> None:
+        if message["type"] == "http.response.start":
+            message = {**message, "headers": [*message.get("headers", []), *SECURITY_HEADERS]}
+        await send(message)
+
+    return secured
+
+
+__all__ = ["Call", "FastLane", "LaneRoute"]
