@@ -21,6 +21,8 @@ from fieldtwin.tsx.dem24.stack import Body, Message, MessageStack, MessageType
 from fieldtwin.tsx.dem24.timebase import SyncOutcome, Timebase, TimeReference, TimeState
 
 MINUTE_MS = 60_000
+_new_message = tuple.__new__
+from_ms = CivilTime.from_ms
 
 Schedule = Callable[[int, Callable[[int], None]], Handle]
 # (message as offered, stored?, flagged as following a loss?, messages in the stack after)
@@ -85,14 +87,19 @@ class Logbook:
     def push(self, message_type: MessageType, stamp: int, body: Body) -> bool:
         """Store a message stamped ``stamp`` ms; True when the stack is now full."""
         tb = self.timebase
-        message = Message(
-            message_type,
-            CivilTime.from_ms(stamp),
-            tb.fault,
-            tb.indicator,
-            self.rack,
-            self.slot,
-            body,
+        # Message(message_type, CivilTime.from_ms(stamp), ...), made as a tuple in C
+        message = _new_message(
+            Message,
+            (
+                message_type,
+                from_ms(stamp),
+                tb.fault,
+                tb.indicator,
+                self.rack,
+                self.slot,
+                body,
+                False,
+            ),
         )
         stack = self.stack
         tap = self.tap
