@@ -40,6 +40,12 @@ from fieldtwin.tsx.dem24.logbook import Logbook
 from fieldtwin.tsx.dem24.oscillation import Detector, Monitor
 from fieldtwin.tsx.dem24.oscillation import Thresholds as OscThresholds
 from fieldtwin.tsx.dem24.registers import (
+    I_NEARLY_FULL,
+    I_NOT_EMPTY,
+    I_PULSE,
+    I_READY,
+    I_SATURATED,
+    I_SYNC_FAULT,
     OW1_OVERALL,
     OW1_PURGE,
     OW1_STOP,
@@ -50,6 +56,7 @@ from fieldtwin.tsx.dem24.stack import (
     CH_SUPPLY,
     CH_SYNC,
     CH_TERMINAL,
+    NEARLY_FULL,
     Body,
     Message,
     MessageStack,
@@ -63,6 +70,8 @@ from fieldtwin.tsx.dem24.timebase import SyncOutcome, Timebase
 from fieldtwin.tsx.module import FaultCategory, IntelligentModule, ModuleContext, ModuleState
 from fieldtwin.tsx.textblock import Exchange
 from fieldtwin.words import get_bit
+
+_CHANGE = MessageType.CHANGE
 
 
 class Dem24(IntelligentModule):
@@ -343,10 +352,29 @@ class Dem24(IntelligentModule):
                 self._log_change(channel, state, stamp)
             self._refresh_words()
         elif state >= 0:
-            self._log_change(channel, state, stamp)
-            self._refresh_edge(True)
+            self._log_edge(channel, state, stamp)
         else:
             self._refresh_edge(False)  # nothing logged: the stack count is as it was
+
+    def _log_edge(self, channel: int, state: int, stamp: int | None) -> None:
+        """``_log_change(channel, state, stamp)`` then ``_refresh_edge(True)``, fused (the
+        shortcut of an accepted edge): the same conditions (``_log``'s, the channel's
+        selection), the same message, the stack-full fault set only when it changes
+        (``_stack_fault``, operational known)."""
+        ow = self.ow
+        logbook = self.logbook
+        if (
+            stamp is not None
+            and ((ow[2] | ((ow[3] & 0xFF) << 16)) >> channel) & 1  # self.selected()
+            and not (ow[1] >> OW1_STOP) & 1  # self.logging: no global stop,
+            and not self.awaiting_configuration  # configured,
+            and logbook.timebase.ready  # the time set
+            and self._mode.state is ModuleState.OPERATIONAL
+        ):
+            full = logbook.push(_CHANGE, stamp, ((channel << 8) | state, 0, 0, 0, 0, 0))
+            if full != self._faults.active(FB_STACK_FULL):
+                self.set_fault(FB_STACK_FULL, full)
+        self._refresh_edge(True)
 
     def _normal_again(self, channel: int, now: int) -> None:
         """An oscillating input is normal again: its state (AMB-DEM-11)."""
@@ -480,8 +508,14 @@ class Dem24(IntelligentModule):
         if iw[5] != count:
             iw[5:8] = count, low, high
             timebase = self.logbook.timebase
-            self.i_bits = input_bits(
-                timebase.ready, count, stack.full, timebase.fault, self.pulse_image
+            # input_bits(timebase.ready, count, stack.full, timebase.fault, pulse_image)
+            self.i_bits = (
+                (timebase.ready << I_READY)
+                | ((count > 0) << I_NOT_EMPTY)
+                | ((count >= NEARLY_FULL) << I_NEARLY_FULL)
+                | ((count >= stack.size) << I_SATURATED)
+                | (timebase.fault << I_SYNC_FAULT)
+                | (self.pulse_image << I_PULSE)
             )
         elif iw[6] != low or iw[7] != high:
             iw[5:8] = count, low, high
