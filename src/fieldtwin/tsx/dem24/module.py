@@ -343,7 +343,7 @@ class Dem24(IntelligentModule):
 
     def _accepted(self, channel: int, level: bool, edge: int, stamp: int | None, now: int) -> None:
         self.edges_stamped += 1
-        state = int(level)
+        state = 1 if level else 0
         oscillation = self.oscillation
         if oscillation is not None:
             state = oscillation.judge(channel, edge, state, now)  # DEM 2.3-3
@@ -353,8 +353,17 @@ class Dem24(IntelligentModule):
             self._refresh_words()
         elif state >= 0:
             self._log_edge(channel, state, stamp)
+        elif self._mode.state is ModuleState.OPERATIONAL and self._words_fresh:
+            # nothing logged: _refresh_edge(False) inlined, the levels IWxy,6/7 only
+            config = self.config
+            readable = self.terminal_block and (self.supply or not config.supply_monitoring)
+            image = self.inputs.level_bits if readable or config.maintain else 0
+            iw = self._iw
+            low, high = image & 0xFFFF, image >> 16
+            if iw[6] != low or iw[7] != high:
+                iw[6:8] = low, high
         else:
-            self._refresh_edge(False)  # nothing logged: the stack count is as it was
+            self._refresh_words()  # as _refresh_edge(False) does there
 
     def _log_edge(self, channel: int, state: int, stamp: int | None) -> None:
         """``_log_change(channel, state, stamp)`` then ``_refresh_edge(True)``, fused (the
