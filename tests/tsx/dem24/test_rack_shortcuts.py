@@ -3,14 +3,15 @@
 ``benchmarks/dem_rack.py`` runs modules that log with FILT 10 ms beside a 10 ms master
 task, several on one synchronization output, their messages read every second.  Two
 PLCs live the same random history: in one every DEM shortcut is on (``Dem24.shortcuts``
-with the fused logging of an edge, ``kept_checks``, ``InputBank.stepped`` and
-``folded``), in the other every one is off (the reference).  Three modules, the first
-driving the IN-SYN of the two others; random and listed edges (some on the master
-task's 10 ms grid, where the confirmation meets the refresh), pulses, reads through the
-API and through the Text Block, global stop and selection.  After every step, and every
-millisecond of the fine steps, both show the same PLC images of every slot, words, bits,
-LEDs, stacks, fault latches, and the same messages offered to each logbook, with the
-instant they were offered and their stamps, in order.
+with the fused logging of an edge, ``kept_checks``, ``InputBank.stepped``, ``folded``
+and ``lazy_stamps``), in the other every one is off (the reference).  Three modules,
+the first driving the IN-SYN of the two others; random and listed edges (some on the
+master task's 10 ms grid, where the confirmation meets the refresh), pulses, drifts of
+the module clock, reads through the API and through the Text Block, global stop and
+selection.  After every step, and every millisecond of the fine steps, both show the
+same PLC images of every slot, words, bits, LEDs, stacks, fault latches, and the same
+messages offered to each logbook, with the instant they were offered and their stamps,
+in order.
 """
 
 from __future__ import annotations
@@ -45,6 +46,7 @@ def _build(fast: bool) -> tuple[Plc, list[Dem24]]:
             module.kept_checks = False
             module.inputs.stepped = False
             module.inputs.folded = False
+            module.inputs.lazy_stamps = False
         log: list[tuple[int, int, object]] = []
 
         def push(message_type: Any, stamp: int, body: Any, module: Dem24 = module) -> bool:
@@ -113,6 +115,7 @@ _step = st.one_of(
     st.tuples(st.just("select"), st.tuples(_module, st.integers(0, 0xFFFF))),
     st.tuples(st.just("pulse"), st.just(0)),
     st.tuples(st.just("read_txt"), _module),
+    st.tuples(st.just("drift"), st.tuples(_module, st.sampled_from([-20.0, 0.0, 25.0, 900.0]))),
 )
 
 
@@ -149,6 +152,9 @@ def _apply(plc: Plc, mods: list[Dem24], kind: str, arg: Any) -> None:
         plc.write(f"OW{mods[k].address},2", value)
     elif kind == "pulse":
         mods[0].sync_pulse()  # OUT-SYN repeats it to the others
+    elif kind == "drift":  # the module clock moves: stamps left to compute are fixed first
+        k, ppm = arg
+        mods[k].set_clock_drift(ppm)
     elif kind == "read_txt":
         plc.exchange(m=_m(mods[arg], 0x00), c=0x01, send=[1, 9], recv_bytes=234)
 
@@ -158,6 +164,7 @@ def _apply(plc: Plc, mods: list[Dem24], kind: str, arg: Any) -> None:
 @example([("random", (0, 0, 1, 15_000)), ("random", (1, 1, 2, 15_000)), ("long", 2)])
 @example([("edges", (1, 2, False, [10 * MS, 30 * MS, 60 * MS])), ("fine", 30), ("read_all", 0)])
 @example([("random", (2, 3, 5, 15_000)), ("pulse", 0), ("fine", 20), ("read_txt", 2)])
+@example([("edges", (0, 1, False, [5 * MS, 10 * MS + 1])), ("drift", (0, 900.0)), ("long", 1)])
 @example([("ow1", (0, 1)), ("random", (0, 0, 1, 15_000)), ("select", (1, 0x30))])
 @example([("random", (1, 4, 7, 15_000)), ("random", (1, 2, 8, 40_000)), ("read", (1, 3))])
 def test_the_rack_shortcuts_change_nothing(steps: list[tuple[str, Any]]) -> None:

@@ -31,6 +31,7 @@ from fieldtwin.tsx.dem24.config import (
 from fieldtwin.tsx.dem24.inputs import (
     CHANNELS,
     TYPE1_24V,
+    UNSTAMPED,
     InputBank,
     InputSignal,
     Thresholds,
@@ -114,6 +115,7 @@ class Dem24(IntelligentModule):
             rack, slot, self.clock_drift_ppm, self.call_at, self.log_overall, self._pulse_lost
         )
         self.inputs = InputBank(self.clock, self.thresholds, self.logbook.stamp, self._accepted)
+        self.logbook.before_change = self.inputs.settle_stamps
         self.sync_input = SyncInput(self.clock, self.thresholds, self._take_pulse, self._repeat)
         self.oscillation: Monitor | None = None  # with OSC in the configuration (3.2-1)
         self.pulse_image = False
@@ -347,6 +349,8 @@ class Dem24(IntelligentModule):
         oscillation = self.oscillation
         if oscillation is not None:
             state = oscillation.judge(channel, edge, state, now)  # DEM 2.3-3
+        if stamp == UNSTAMPED and state >= 0:  # to be logged: the clock's reading at the edge
+            stamp = self.logbook.stamp(edge)
         if not self.shortcuts:
             if state >= 0:
                 self._log_change(channel, state, stamp)
