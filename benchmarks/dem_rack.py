@@ -2,7 +2,7 @@
 
 32 TSX DEM 2412 (the most one PLC configuration takes, DEM 6.2-2) in racks 0..3:
 the first has a 30 s pulse generator on IN-SYN and its OUT-SYN drives the 31
-others (DEM 7.2, at most 32 on one output); each is configured to log (LOG, FILT 0,
+others (DEM 7.2, at most 32 on one output); each is configured to log (LOG, FILT 10 ms,
 T-SYN 30 s), has its time set (request 2) and 4 of its channels driven by random
 edges (one every 2 s on average each), so that every module logs all the time; the
 messages are read every simulated second through the module API.

@@ -9,8 +9,8 @@ Module time is a count of milliseconds since 1970-01-01 00:00:00.000.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
 from functools import lru_cache
+from typing import NamedTuple
 
 from fieldtwin.errors import ConfigError
 
@@ -55,9 +55,11 @@ def civil_from_days(days: int) -> tuple[int, int, int]:
     return yoe + era * 400 + (month <= 2), month, day
 
 
-@dataclass(frozen=True, slots=True)
-class CivilTime:
-    """A date and time to the millisecond, as the messages of DEM 4.2-2 carry it."""
+class CivilTime(NamedTuple):
+    """A date and time to the millisecond, as the messages of DEM 4.2-2 carry it.
+
+    A named tuple, not a frozen dataclass: one is made for every message logged, and a
+    frozen dataclass costs three times as much to make (docs/decisions.md)."""
 
     year: int  # full civil year
     month: int
@@ -77,18 +79,26 @@ class CivilTime:
 
     @staticmethod
     def from_ms(value: int) -> CivilTime:
-        days, rest = divmod(value, MS_PER_DAY)
-        year, month, day = civil_from_days(days)
-        hour, rest = divmod(rest, 3_600_000)
-        minute, rest = divmod(rest, 60_000)
-        second, ms = divmod(rest, 1000)
-        return CivilTime(year, month, day, hour, minute, second, ms)
+        minutes, rest = divmod(value, 60_000)
+        # (year, month, day, hour, minute) + (second, ms), made as a tuple in C
+        return _new_civil(CivilTime, minute_fields(minutes) + divmod(rest, 1000))
 
     def __str__(self) -> str:
         return (
             f"{self.year:04d}-{self.month:02d}-{self.day:02d}"
             f" {self.hour:02d}:{self.minute:02d}:{self.second:02d}.{self.ms:03d}"
         )
+
+
+_new_civil = tuple.__new__  # CivilTime(*fields) without the Python-level __new__
+
+
+@lru_cache(maxsize=64)  # once per minute of module time that messages are stamped in
+def minute_fields(minutes: int) -> tuple[int, int, int, int, int]:
+    """Minutes since 1970-01-01 00:00 -> (year, month, day, hour, minute)."""
+    days, rest = divmod(minutes, 1440)
+    hour, minute = divmod(rest, 60)
+    return (*civil_from_days(days), hour, minute)
 
 
 def valid_fields(yy: int, month: int, day: int, hour: int, minute: int, second: int) -> bool:

@@ -24,6 +24,7 @@ from fieldtwin.tsx.dem24.crossing import next_event
 
 CHANNELS = 24
 HARDWARE_FILTER_US = 500
+UNSTAMPED = -1  # a stamp not computed yet: the module clock's reading at the edge, later
 InputSignal = DiscreteSignal | AnalogSignal  # DEM 1.2-1 "500 microsecond filtering"
 
 
@@ -101,6 +102,11 @@ class InputBank:
 
     stepped = True
     folded = True
+    # lazy_stamps: a stepped signal's edge leaves its stamp UNSTAMPED; whoever logs it
+    # reads the module clock at the edge then (an oscillating input's is never read), and
+    # every stamp left is fixed (settle_stamps) before a pulse or a drift change moves the
+    # clock.  False (the reference of the tests): stamped at the edge
+    lazy_stamps = True
 
     def __init__(
         self,
@@ -189,7 +195,8 @@ class InputBank:
                     pending.cancel()  # a pulse shorter than the filter is rejected
                     ch.pending = None
                 if self.active and (level and self.supply_ok) != ch.level:
-                    ch.edge_t, ch.stamp = t, self._stamp(t)  # stamped at the edge
+                    # stamped at the edge, now or (lazy_stamps) when logged
+                    ch.edge_t, ch.stamp = t, UNSTAMPED if self.lazy_stamps else self._stamp(t)
                     if self.folded:
                         # the confirmation's sequence number, then the next edge's (as
                         # scheduled in this order); inline when nothing comes between
@@ -227,6 +234,14 @@ class InputBank:
             return
         ch.edge_t, ch.stamp = t, self._stamp(t)  # stamped at the edge (manual-notes)
         ch.pending = self.clock.schedule(t + self.filter_us, ch.confirm)
+
+    def settle_stamps(self) -> None:
+        """Stamp every edge left UNSTAMPED with the module clock as it is: called before
+        anything changes what the clock read at a past instant (a pulse, a drift)."""
+        stamp = self._stamp
+        for ch in self._ch:
+            if ch.stamp == UNSTAMPED:
+                ch.stamp = stamp(ch.edge_t)
 
     def _confirm(self, channel: int, now: int) -> None:
         ch = self._ch[channel]

@@ -21,6 +21,8 @@ from fieldtwin.tsx.dem24.stack import Body, Message, MessageStack, MessageType
 from fieldtwin.tsx.dem24.timebase import SyncOutcome, Timebase, TimeReference, TimeState
 
 MINUTE_MS = 60_000
+_new_message = tuple.__new__
+from_ms = CivilTime.from_ms
 
 Schedule = Callable[[int, Callable[[int], None]], Handle]
 # (message as offered, stored?, flagged as following a loss?, messages in the stack after)
@@ -56,9 +58,13 @@ class Logbook:
         self._periodic_due_ms: int | None = None
         self._loss: Handle | None = None
         self.tap: LogTap | None = None  # an observer of every message offered (the event bus)
+        # told before the module clock is reset, set again or drifts otherwise (the inputs'
+        # stamps not computed yet: InputBank.settle_stamps)
+        self.before_change: Callable[[], None] | None = None
 
     def reset(self, drift_ppm: float) -> None:
         """DEM 2.5-3 power-up: no protected memory, time and messages are lost."""
+        self._clock_changes()
         self.timebase = Timebase(drift_ppm=drift_ppm)
         self.stack = MessageStack()
         self._per_ms, self._periodic_due_ms = 0, None
@@ -85,14 +91,19 @@ class Logbook:
     def push(self, message_type: MessageType, stamp: int, body: Body) -> bool:
         """Store a message stamped ``stamp`` ms; True when the stack is now full."""
         tb = self.timebase
-        message = Message(
-            message_type,
-            CivilTime.from_ms(stamp),
-            tb.fault,
-            tb.indicator,
-            self.rack,
-            self.slot,
-            body,
+        # Message(message_type, CivilTime.from_ms(stamp), ...), made as a tuple in C
+        message = _new_message(
+            Message,
+            (
+                message_type,
+                from_ms(stamp),
+                tb.fault,
+                tb.indicator,
+                self.rack,
+                self.slot,
+                body,
+                False,
+            ),
         )
         stack = self.stack
         tap = self.tap
@@ -116,6 +127,7 @@ class Logbook:
     def pulse(self, edge: int, now: int) -> SyncOutcome:
         """A pulse whose leading edge was at ``edge``: check or set the clock, watch for
         the next one, and find the periodic instant again (the clock may have moved)."""
+        self._clock_changes()
         outcome = self.timebase.pulse(edge)
         if self._loss is not None:
             self._loss.cancel()
@@ -133,7 +145,12 @@ class Logbook:
         self._loss = None
         self._on_lost(now)
 
+    def _clock_changes(self) -> None:
+        if self.before_change is not None:
+            self.before_change()
+
     def set_drift(self, drift_ppm: float, now: int) -> None:
+        self._clock_changes()
         self.timebase.clock.set_drift(drift_ppm, now)
         self.rearm_periodic(now)
 

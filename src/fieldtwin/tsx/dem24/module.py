@@ -31,6 +31,7 @@ from fieldtwin.tsx.dem24.config import (
 from fieldtwin.tsx.dem24.inputs import (
     CHANNELS,
     TYPE1_24V,
+    UNSTAMPED,
     InputBank,
     InputSignal,
     Thresholds,
@@ -40,6 +41,12 @@ from fieldtwin.tsx.dem24.logbook import Logbook
 from fieldtwin.tsx.dem24.oscillation import Detector, Monitor
 from fieldtwin.tsx.dem24.oscillation import Thresholds as OscThresholds
 from fieldtwin.tsx.dem24.registers import (
+    I_NEARLY_FULL,
+    I_NOT_EMPTY,
+    I_PULSE,
+    I_READY,
+    I_SATURATED,
+    I_SYNC_FAULT,
     OW1_OVERALL,
     OW1_PURGE,
     OW1_STOP,
@@ -50,6 +57,7 @@ from fieldtwin.tsx.dem24.stack import (
     CH_SUPPLY,
     CH_SYNC,
     CH_TERMINAL,
+    NEARLY_FULL,
     Body,
     Message,
     MessageStack,
@@ -63,6 +71,8 @@ from fieldtwin.tsx.dem24.timebase import SyncOutcome, Timebase
 from fieldtwin.tsx.module import FaultCategory, IntelligentModule, ModuleContext, ModuleState
 from fieldtwin.tsx.textblock import Exchange
 from fieldtwin.words import get_bit
+
+_CHANGE = MessageType.CHANGE
 
 
 class Dem24(IntelligentModule):
@@ -105,6 +115,7 @@ class Dem24(IntelligentModule):
             rack, slot, self.clock_drift_ppm, self.call_at, self.log_overall, self._pulse_lost
         )
         self.inputs = InputBank(self.clock, self.thresholds, self.logbook.stamp, self._accepted)
+        self.logbook.before_change = self.inputs.settle_stamps
         self.sync_input = SyncInput(self.clock, self.thresholds, self._take_pulse, self._repeat)
         self.oscillation: Monitor | None = None  # with OSC in the configuration (3.2-1)
         self.pulse_image = False
@@ -334,19 +345,49 @@ class Dem24(IntelligentModule):
 
     def _accepted(self, channel: int, level: bool, edge: int, stamp: int | None, now: int) -> None:
         self.edges_stamped += 1
-        state = int(level)
+        state = 1 if level else 0
         oscillation = self.oscillation
         if oscillation is not None:
             state = oscillation.judge(channel, edge, state, now)  # DEM 2.3-3
+        if stamp == UNSTAMPED and state >= 0:  # to be logged: the clock's reading at the edge
+            stamp = self.logbook.stamp(edge)
         if not self.shortcuts:
             if state >= 0:
                 self._log_change(channel, state, stamp)
             self._refresh_words()
         elif state >= 0:
-            self._log_change(channel, state, stamp)
-            self._refresh_edge(True)
+            self._log_edge(channel, state, stamp)
+        elif self._mode.state is ModuleState.OPERATIONAL and self._words_fresh:
+            # nothing logged: _refresh_edge(False) inlined, the levels IWxy,6/7 only
+            config = self.config
+            readable = self.terminal_block and (self.supply or not config.supply_monitoring)
+            image = self.inputs.level_bits if readable or config.maintain else 0
+            iw = self._iw
+            low, high = image & 0xFFFF, image >> 16
+            if iw[6] != low or iw[7] != high:
+                iw[6:8] = low, high
         else:
-            self._refresh_edge(False)  # nothing logged: the stack count is as it was
+            self._refresh_words()  # as _refresh_edge(False) does there
+
+    def _log_edge(self, channel: int, state: int, stamp: int | None) -> None:
+        """``_log_change(channel, state, stamp)`` then ``_refresh_edge(True)``, fused (the
+        shortcut of an accepted edge): the same conditions (``_log``'s, the channel's
+        selection), the same message, the stack-full fault set only when it changes
+        (``_stack_fault``, operational known)."""
+        ow = self.ow
+        logbook = self.logbook
+        if (
+            stamp is not None
+            and ((ow[2] | ((ow[3] & 0xFF) << 16)) >> channel) & 1  # self.selected()
+            and not (ow[1] >> OW1_STOP) & 1  # self.logging: no global stop,
+            and not self.awaiting_configuration  # configured,
+            and logbook.timebase.ready  # the time set
+            and self._mode.state is ModuleState.OPERATIONAL
+        ):
+            full = logbook.push(_CHANGE, stamp, ((channel << 8) | state, 0, 0, 0, 0, 0))
+            if full != self._faults.active(FB_STACK_FULL):
+                self.set_fault(FB_STACK_FULL, full)
+        self._refresh_edge(True)
 
     def _normal_again(self, channel: int, now: int) -> None:
         """An oscillating input is normal again: its state (AMB-DEM-11)."""
@@ -480,8 +521,14 @@ class Dem24(IntelligentModule):
         if iw[5] != count:
             iw[5:8] = count, low, high
             timebase = self.logbook.timebase
-            self.i_bits = input_bits(
-                timebase.ready, count, stack.full, timebase.fault, self.pulse_image
+            # input_bits(timebase.ready, count, stack.full, timebase.fault, pulse_image)
+            self.i_bits = (
+                (timebase.ready << I_READY)
+                | ((count > 0) << I_NOT_EMPTY)
+                | ((count >= NEARLY_FULL) << I_NEARLY_FULL)
+                | ((count >= stack.size) << I_SATURATED)
+                | (timebase.fault << I_SYNC_FAULT)
+                | (self.pulse_image << I_PULSE)
             )
         elif iw[6] != low or iw[7] != high:
             iw[5:8] = count, low, high

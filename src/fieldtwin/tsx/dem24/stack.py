@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import enum
 from collections import deque
-from dataclasses import dataclass
+from typing import NamedTuple
 
 from fieldtwin.tsx.dem24.civil import CivilTime
 
@@ -43,9 +43,10 @@ class MessageType(enum.IntEnum):
     OVERALL = 1  # general state of the inputs
 
 
-@dataclass(frozen=True, slots=True)
-class Message:
-    """One logged message; ``body`` is words 7..12 (6 words)."""
+class Message(NamedTuple):
+    """One logged message; ``body`` is words 7..12 (6 words).
+
+    A named tuple, as :class:`CivilTime`: one is made for every message logged."""
 
     type: MessageType
     stamp: CivilTime
@@ -65,9 +66,7 @@ class Message:
         return self.body[0] & 0xFF
 
     def flagged(self) -> Message:
-        return Message(
-            self.type, self.stamp, self.h, self.indicator, self.rack, self.slot, self.body, True
-        )
+        return self._replace(overflow=True)
 
     def words(self, exchange: int, count: int) -> list[int]:
         """The 13 words of DEM 4.2-2 (binary bytes, AMB-DEM-07)."""
@@ -129,7 +128,7 @@ class MessageStack:
 
     def push(self, message: Message) -> bool:
         """Store ``message``; False (and counted) when the stack is full."""
-        if self.full:
+        if len(self._messages) >= self.size:  # self.full
             self.lost += 1
             self.total_lost += 1
             return False
@@ -142,10 +141,9 @@ class MessageStack:
 
     def pop(self, count: int) -> list[Message]:
         """Remove and return up to ``count`` oldest messages (DEM 4.2-3: read = deleted)."""
-        out = []
-        for _ in range(min(count, len(self._messages))):
-            out.append(self._messages.popleft())
-        return out
+        messages = self._messages
+        popleft = messages.popleft
+        return [popleft() for _ in range(min(count, len(messages)))]
 
     def peek(self) -> list[Message]:
         return list(self._messages)
