@@ -93,7 +93,7 @@ changes = st.builds(
         st.integers(0, 30).map(lambda k: k * 10_000),  # on a task instant
     ),
     slot=st.sampled_from(SLOTS),
-    what=st.sampled_from(["iw", "bits", "fault"]),
+    what=st.sampled_from(["iw", "bits", "fault", "chain"]),
     index=st.integers(0, 7),
     value=st.integers(0, 0xFFFF),
 )
@@ -150,7 +150,15 @@ def build(program: str, park: bool) -> tuple[Plc, list[tuple[int, int, list[int]
 
 def apply_change(plc: Plc, change: Change) -> None:
     module = plc.module(0, change.slot)
-    if change.what == "iw":
+    if change.what in ("chain", "relay"):  # events that schedule the next a task later
+        # (as a DEM's filter confirmation does, 10 ms after its edge) and change nothing
+        # the PLC sees: the face changes at the end of the chain, and its order against
+        # the task of that instant is the one the task's own sequence number gives
+        then = "relay" if change.what == "chain" else ("bits", "iw")[change.value >> 8 & 1]
+        later = Change(0, change.slot, then, change.index, change.value ^ 0xFF)
+        delay = 10_000 * (1 + change.value % 2)
+        plc.clock.call_later(delay, lambda now: apply_change(plc, later))
+    elif change.what == "iw":
         module.iw[change.index] = change.value
     elif change.what == "bits":
         module.i_bits = change.value
@@ -265,3 +273,29 @@ def test_the_minute_bit_wakes_a_parked_task_on_its_instant() -> None:
         assert plc.read("SY7") == every.read("SY7")
         assert plc.data[3] == every.data[3] and plc.read("O1,0") == every.read("O1,0")
     assert plc.data[3] >= 1
+
+
+def test_a_chain_of_events_meets_the_parked_task_in_the_unparked_order() -> None:
+    # an event on a task instant, scheduled well before it, runs before that instant's
+    # task; what it schedules a task later must run before that later task too (the
+    # task's number is taken after it), and so on: the face changes at the end of the
+    # chain reach the image at the same task, and the outputs leave at the same instant
+    runs = []
+    for park in (True, False):
+        plc, seen = build("objects", park)
+        plc.advance(1.0)  # parked by now (nothing changes)
+        module = plc.module(0, 1)
+
+        def third(now: int, m: Any = module) -> None:
+            m.i_bits = m.i_bits ^ 1  # I1,0: O1,1 follows at the next task but one
+
+        def second(now: int, p: Plc = plc) -> None:
+            p.clock.call_later(10_000, third)
+
+        def first(now: int, p: Plc = plc) -> None:
+            p.clock.call_later(10_000, second)
+
+        plc.clock.call_later(50_000, first)
+        plc.advance(0.2)
+        runs.append((seen[-4:], plc.program.skipped if plc.program else None, plc.cycles))
+    assert runs[0] == runs[1]
