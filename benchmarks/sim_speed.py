@@ -13,6 +13,7 @@ process (the figure to compare on a shared machine) and per wall second.
 
     python benchmarks/sim_speed.py            # the default plant 1 h, devices 10 min
     python benchmarks/sim_speed.py --day      # and the default plant for 24 h
+    python benchmarks/sim_speed.py --day --reps 3  # the 24 h three times, and the median
     python benchmarks/sim_speed.py --cli      # and `fieldtwin run` itself, for 1 h
     python benchmarks/sim_speed.py --counts   # and instructions per simulated second
 
@@ -26,6 +27,7 @@ from __future__ import annotations
 
 import argparse
 import copy
+import statistics
 import subprocess
 import sys
 import time
@@ -111,13 +113,16 @@ def measure(make: Callable[[], Plant], sim_s: float, event_driven: bool) -> tupl
         plant.close()
 
 
-def row(name: str, sim_s: float, make: Callable[[], Plant], baseline: bool = True) -> None:
+def row(
+    name: str, sim_s: float, make: Callable[[], Plant], baseline: bool = True
+) -> tuple[float, float]:
     cpu, wall = measure(make, sim_s, True)
     line = f"{name:<34} {sim_s / 3600:>5.2f} h {cpu:>9,.0f}x {wall:>9,.0f}x"
     if baseline:
         cpu0, wall0 = measure(make, sim_s, False)
         line += f" {cpu0:>9,.0f}x {wall0:>9,.0f}x {cpu / cpu0:>7.2f}"
     print(line, flush=True)
+    return cpu, wall
 
 
 def idle_rack(count: int) -> Callable[[], Plant]:
@@ -163,6 +168,7 @@ def main() -> int:
     parser.add_argument("--hour", type=float, default=3600.0, help="the default plant's stretch")
     parser.add_argument("--device", type=float, default=600.0, help="each device's stretch")
     parser.add_argument("--counts", action="store_true", help="instructions per simulated s")
+    parser.add_argument("--reps", type=int, default=1, help="runs of the 24 h (--day): median")
     parser.add_argument("--workload", type=int, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.workload is not None:
@@ -174,7 +180,15 @@ def main() -> int:
     print(" " * 53 + "(full refresh of every slot at every task: the baseline)")
     row("default plant (AEM program)", args.hour, lambda: build(default_data()))
     if args.day:
-        row("default plant (AEM program)", 86400.0, lambda: build(default_data()), False)
+        days = [
+            row("default plant (AEM program)", 86400.0, lambda: build(default_data()), False)
+            for _ in range(max(1, args.reps))
+        ]
+        if len(days) > 1:
+            cpu = statistics.median(d[0] for d in days)
+            wall = statistics.median(d[1] for d in days)
+            name = f"  median of {len(days)}"
+            print(f"{name:<34} {24:>5.2f} h {cpu:>9,.0f}x {wall:>9,.0f}x", flush=True)
     no_program = default_data()
     for key in ("program", "text_blocks"):
         no_program["plc"].pop(key)

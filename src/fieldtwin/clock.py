@@ -53,6 +53,12 @@ class Handle:
     def active(self) -> bool:
         return self._entry[_CALLBACK] is not None
 
+    @property
+    def seq(self) -> int:
+        """The entry's sequence number (its place among the events of its instant)."""
+        seq: int = self._entry[2]
+        return seq
+
     def cancel(self) -> None:
         entry = self._entry
         if entry[_CALLBACK] is not None:
@@ -80,6 +86,10 @@ class SimClock:
         self._until = -1
         # one object per clock that devices share, by name (the TES inputs' beat)
         self.shared: dict[str, Any] = {}
+        # told whenever an event is scheduled outside a run_until (between runs: a
+        # command, bytes delivered, a test): a parked PLC master task puts its next task
+        # back where the unparked run would have it (fieldtwin.tsx.plc, "parking")
+        self.outside_watchers: list[Callable[[], None]] = []
 
     @property
     def now(self) -> int:
@@ -102,6 +112,8 @@ class SimClock:
             raise ConfigError(f"cannot schedule at {at} us: time is already {self._now} us")
         entry = [at, priority, next(self._seq), callback]
         heapq.heappush(self._heap, entry)
+        if self._until < 0 and self.outside_watchers:
+            self._outside()
         return Handle(self, entry)
 
     def schedule_as(self, at: int, seq: int, callback: Callback) -> Handle:
@@ -110,7 +122,13 @@ class SimClock:
             raise ConfigError(f"cannot schedule at {at} us: time is already {self._now} us")
         entry = [at, 0, seq, callback]
         heapq.heappush(self._heap, entry)
+        if self._until < 0 and self.outside_watchers:
+            self._outside()
         return Handle(self, entry)
+
+    def _outside(self) -> None:
+        for watcher in list(self.outside_watchers):
+            watcher()
 
     def run_inline(self, at: int, seq: int, callback: Callback) -> bool:
         """Run ``callback(at)`` now, from within an event, when that is what the heap
@@ -151,6 +169,25 @@ class SimClock:
             heapq.heappop(heap)
             self._cancelled -= 1
         return heap[0][_TIME] if heap else None
+
+    def next_deadline_besides(self, handle: Handle) -> int | None:
+        """Time of the next live event other than ``handle``'s, or None."""
+        heap, entry = self._heap, handle._entry
+        while heap:
+            top = heap[0]
+            if top[_CALLBACK] is None:
+                heapq.heappop(heap)
+                self._cancelled -= 1
+            elif top is entry:
+                heapq.heappop(heap)
+                try:
+                    return self.next_deadline()
+                finally:
+                    heapq.heappush(heap, entry)
+            else:
+                at: int = top[_TIME]
+                return at
+        return None
 
     def run_until(self, until: int) -> None:
         """Run every event due at or before ``until``, then set now = until."""

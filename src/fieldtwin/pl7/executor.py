@@ -31,6 +31,7 @@
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from fieldtwin.pl7 import tree as t
@@ -99,9 +100,9 @@ class Executor:
         self.program = program
         self.memory = memory
         self.edges: list[int] = []
-        self.cycles = 0
+        self._cycles = 0
         self.faults: deque[FaultRecord] = deque(maxlen=MAX_FAULTS)
-        self.held: Hit | None = None
+        self._held: Hit | None = None
         self.hits: list[Hit] = []
         self._depth = 0
         self.budget = DEFAULT_BUDGET  # operations a master task may run (the watchdog)
@@ -125,7 +126,12 @@ class Executor:
         self.modules: dict[str, Module] = {}
         self._subroutines: dict[int, Module] = {}
         self._effects = 0  # Text Block commands, faults and hits so far
-        self.skipped = 0  # master tasks counted without being run (a fixed point)
+        self._skipped = 0  # master tasks counted without being run (a fixed point)
+        # a parked master task (fieldtwin.tsx.plc): the idle tasks it owes, counted in
+        # ``cycles`` and ``skipped`` when read; ``on_touch`` is told of every change of
+        # how the next tasks run (breakpoints, hold, restarts), which wakes it
+        self.owed: Callable[[], int] | None = None
+        self.on_touch: Callable[[], None] | None = None
         self.skip_idle = True  # False: every task runs (the benchmarks' baseline)
         self._fixed: tuple[object, ...] | None = None  # what a fixed point left
         watched = WatchedMemory(memory, self._effect)
@@ -160,6 +166,37 @@ class Executor:
                     err.line, err.column, err.token, err.expected, source, said=err.said
                 ) from None
             raise
+
+    @property
+    def cycles(self) -> int:
+        """Master tasks so far (run or skipped)."""
+        owed = self.owed
+        return self._cycles if owed is None else self._cycles + owed()
+
+    @property
+    def skipped(self) -> int:
+        """Master tasks counted without being run: a fixed point (pl7/watch.py)."""
+        owed = self.owed
+        return self._skipped if owed is None else self._skipped + owed()
+
+    def count_idle(self, tasks: int) -> None:
+        """``tasks`` master tasks that would each have been skipped (a parked task)."""
+        self._cycles += tasks
+        self._skipped += tasks
+
+    @property
+    def held(self) -> Hit | None:
+        """Where a breakpoint (or the console) holds the executor, or None."""
+        return self._held
+
+    @held.setter
+    def held(self, hit: Hit | None) -> None:
+        self._touch()
+        self._held = hit
+
+    def _touch(self) -> None:
+        if self.on_touch is not None:
+            self.on_touch()
 
     @property
     def budget_cell(self) -> list[int]:
@@ -236,17 +273,18 @@ class Executor:
 
     def hit(self, module: str, label: int) -> None:
         self._effects += 1
-        self._hit(Hit(self.cycles, module, label))
+        self._hit(Hit(self._cycles, module, label))
 
     def fault(self, module: str, line: int, err: ProgramFault) -> None:
         self._effects += 1
-        self.faults.append(FaultRecord(module, line, self.cycles, str(err)))
+        self.faults.append(FaultRecord(module, line, self._cycles, str(err)))
         self._sy[FAULT_BIT](1)
 
     # --- the master task ---------------------------------------------------------------
 
     def cold_restart(self) -> None:
         """Internal bits and words cleared, edges forgotten, chart to its initial steps."""
+        self._touch()
         self.memory.clear_internal()
         self.edges[:] = [0] * len(self.edges)
         if self.grafcet is not None:
@@ -260,6 +298,7 @@ class Executor:
 
     def hot_restart(self) -> None:
         """Everything kept (SY11 too, after a watchdog); SY1 reads 1 during the next task."""
+        self._touch()
         self.overrun = None
         self._restart_bit = HOT_RESTART_BIT
         self._fixed = None
@@ -267,7 +306,7 @@ class Executor:
     def run_master_task(self, now_us: int | None = None) -> bool:
         """One master task (PRE, CHART, POST) unless a breakpoint holds the executor
         or the watchdog tripped (until a cold or a hot restart)."""
-        if self.held is not None or self.overrun is not None:
+        if self._held is not None or self.overrun is not None:
             return False
         self._task(now_us)
         return True
@@ -278,14 +317,14 @@ class Executor:
             return
         self.held = None
         self._task(now_us)
-        if self.held is None:
-            self.held = Hit(self.cycles)
+        if self._held is None:
+            self._held = Hit(self.cycles)
 
     def resume(self) -> None:
         self.held = None
 
     def _task(self, now_us: int | None) -> None:
-        self.cycles += 1
+        self._cycles += 1
         restart = self._restart_bit
         if restart is not None:
             self._sy[restart](1)
@@ -304,7 +343,7 @@ class Executor:
         else:
             before = snapshot()
             if before == self._fixed:  # the same as after a task that changed nothing
-                self.skipped += 1
+                self._skipped += 1
                 return
             effects = self._effects
             self._sections()
@@ -324,7 +363,7 @@ class Executor:
         except WatchdogOverrun as over:  # the task is cut where it is
             self._effects += 1
             message = f"master task exceeded {self.budget} operations (the watchdog)"
-            self.overrun = FaultRecord(over.module, over.line, self.cycles, message)
+            self.overrun = FaultRecord(over.module, over.line, self._cycles, message)
             self._sy[WATCHDOG_BIT](1)
 
     def _run_sections(self) -> None:
@@ -337,7 +376,7 @@ class Executor:
             if self._step_breaks:
                 for k in g.activated:
                     if k in self._step_breaks:
-                        self._hit(Hit(self.cycles, step=str(g.layout.nodes[k])))
+                        self._hit(Hit(self._cycles, step=str(g.layout.nodes[k])))
         post = self.modules.get("POST")
         if post is not None:
             self.run_module(post)
@@ -348,6 +387,7 @@ class Executor:
         compiled = self.modules.get(module)
         if compiled is None or label not in compiled.labels:
             raise Pl7Error(0, 0, f"{module} L{label}", "a label of a Literal section")
+        self._touch()
         self.watch(module).add(label)
 
     def break_at_step(self, step: str) -> None:
@@ -356,9 +396,11 @@ class Executor:
         names = {str(node): k for k, node in enumerate(self.layout.nodes)}
         if step not in names:
             raise Pl7Error(0, 0, step, "a step of the chart: " + ", ".join(names))
+        self._touch()
         self._step_breaks.add(names[step])
 
     def clear_breakpoints(self) -> None:
+        self._touch()
         for labels in self._label_breaks.values():
             labels.clear()  # the compiled chunks keep these sets
         self._step_breaks.clear()
@@ -366,8 +408,8 @@ class Executor:
     def _hit(self, hit: Hit) -> None:
         self.hits.append(hit)
         del self.hits[:-MAX_FAULTS]
-        if self.held is None:
-            self.held = hit
+        if self._held is None:
+            self._held = hit
 
     # --- state ---------------------------------------------------------------------------
 

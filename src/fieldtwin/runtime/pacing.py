@@ -157,7 +157,9 @@ class Free:
     def step(self, target: int | None, end: int | None, busy: bool, pace: Pace) -> None:
         drive = self.drive
         if target is not None:
-            drive.settle(target)
+            # never past the next tick: a parked master task (fieldtwin.tsx.plc) leaves
+            # long gaps between instants, and the ticks still come on their time
+            drive.settle(drive.ticks.soonest(target))  # type: ignore[arg-type]
             return
         # nothing scheduled, nothing real, no end (run_forever): wait on the wall
         now, speed = drive.clock.now, pace.speed
@@ -223,6 +225,7 @@ class Fast:
     def _busy(self, target: int | None, end: int | None) -> None:
         drive = self.drive
         wall = drive.wall
+        target = drive.ticks.soonest(target)  # the ticks on their time (as in Free)
         if self.poll_s:
             now_wall = wall.monotonic()
             if now_wall < self.next_poll:  # polled less than poll_s ago

@@ -65,6 +65,8 @@ M = TypeVar("M", bound=IntelligentModule)
 ModuleOption = bool | int | float | str  # a module's own constructor option (quantize...)
 
 
+HALF_MINUTE_US = 30 * S  # SY7 flips every half minute (pl7.executor)
+PARK_MAX_US = 1 * S  # a parked task event at most this far ahead with nothing scheduled
 POWER_RESERVE_US = 10 * MS  # a shorter break does not restart the modules (F-9)
 MAX_PROGRAM_BYTES = 1 * MiB  # a program file read (the tokenizer's bound is 1,000,000 characters)
 WATCHDOG_RANGE_MS = (10, 500)  # the task watchdog periods a plant may give (W-1)
@@ -86,6 +88,7 @@ class Plc:
         host: Host | None = None,
         event_driven: bool = True,
         watchdog_ms: float = WATCHDOG_MS,
+        park: bool = True,
     ) -> None:
         if model not in MODELS:
             raise ConfigError(f"unknown PLC model {model!r} (allowed: {', '.join(MODELS)})")
@@ -107,7 +110,7 @@ class Plc:
         # event stream (fieldtwin.plant)
         self.on_fault: Callable[[int, str], None] | None = None
         self._powered = True
-        self.cycles = 0
+        self._cycles = 0
         self.txt = TextBlocks(self.model.table_max, self.model.report_name, self._lookup)
         self.data = self.txt.data  # internal words W0..W4095
         self.bits = [0] * INTERNAL_BITS  # B0..B4095
@@ -129,7 +132,17 @@ class Plc:
         self._bus_pending = False  # a module's face changed since the last refresh
         self._outputs_touched = False  # outputs written from outside the program
         self._calendar_words: tuple[int, list[tuple[int, int]]] = (-1, [])
-        self._scan: Handle | None = self.clock.call_later(self.scan_us, self._end_of_task)
+        # Parking (docs/decisions.md, "Parking the idle master task"): after a task that
+        # left everything as it found it, the next task event goes to the first task
+        # instant at or after the next event of the clock (or an SY7 / calendar change);
+        # the tasks in between are counted, not run.  False: an event at every task,
+        # the reference of tests/tsx/test_parking.py.
+        self.parks = park
+        self._parked = False
+        self._counted_to = 0  # while parked: the last task instant counted
+        self._real_at = 0  # while parked: the first task instant that must really run
+        self._phase = self.clock.now % self.scan_us  # the task instants' grid
+        self._scan: Handle = self.clock.call_later(self.scan_us, self._end_of_task)
 
     # --- racks and slots -------------------------------------------------------
 
@@ -149,6 +162,7 @@ class Plc:
         make: Callable[..., IntelligentModule] = cls
         ctx = ModuleContext(self.clock, self.model.name, self._enable_pacing, self._open_line)
         module = make(ctx, rack, slot, declared_code=code, **options)
+        self._wake()
         self._slots[(rack, slot)] = Slot(module)
         module.bus_listener = self._bus_changed
         self._bus_pending = True
@@ -208,6 +222,7 @@ class Plc:
     def remove(self, rack: int, slot: int) -> None:
         """Pull a module out of its slot under power."""
         entry = self._entry(rack, slot)
+        self._wake()
         entry.present = False
         self._bus_pending = entry.module.bus_dirty = True  # the slot now reads ABSENT
         entry.module.power_off()
@@ -217,6 +232,7 @@ class Plc:
     def reinsert(self, rack: int, slot: int) -> None:
         """Put a pulled module back: it runs its initial self-test."""
         entry = self._entry(rack, slot)
+        self._wake()
         if not entry.present:
             entry.present = True
             entry.module.power_on()
@@ -299,13 +315,25 @@ class Plc:
 
     def _bus_changed(self, module: IntelligentModule) -> None:
         self._bus_pending = True
+        if self._parked:
+            self._wake()
+
+    @property
+    def cycles(self) -> int:
+        """Master tasks so far (while powered)."""
+        return self._cycles + self._owed()
 
     def _end_of_task(self, now: int) -> None:
+        if self._parked:
+            if now < self._real_at and self.parks and self.event_driven:
+                self._idle_tasks(now)  # nothing changed: each task would skip
+                return
+            self._unpark()  # an SY7 / calendar change: this task really runs
         # the clock calls this at ``now`` = its time: call_later(scan_us) without the check
         self._scan = self.clock.schedule(now + self.scan_us, self._end_of_task)
         if not self._powered:
             return
-        self.cycles += 1
+        self._cycles += 1
         program = self.program
         wrote = program is not None  # the program may have written the output image
         if program is not None and self.running:  # PRE, CHART, POST on the input image
@@ -318,13 +346,138 @@ class Plc:
             wrote = program.skipped == skipped  # a skipped task wrote nothing
             if program.overrun is not None:
                 self._watchdog(program, now)
-        registers = self.cycles % self.model.register_every == 0
+        registers = self._cycles % self.model.register_every == 0
         if not self.event_driven:
             for entry in self._slots.values():
                 self._refresh(entry, registers, now)
-        elif wrote or self._outputs_touched or self._bus_pending:
-            self._refresh_changed(wrote, registers, now)
+        elif (wrote or self._outputs_touched or self._bus_pending) and self._refresh_changed(
+            wrote, registers, now
+        ):
+            wrote = True  # a new input image: the next task sees it
         self.txt.end_of_task(now, self.running)
+        if self.parks and not wrote and self._idle(program):
+            self._park(now)
+
+    # --- parking the idle master task ---------------------------------------------
+    #
+    # A task is idle when the program skipped it (a fixed point: pl7/watch.py) or there
+    # is none, no bus face or output changed, and no Text Block is at work: the next
+    # task would do the same nothing, and so would every task after it until something
+    # the PLC sees changes.  What can change it: a module's bus face (its listener), a
+    # write or a command through the Plc's methods, the executor's controls
+    # (breakpoints, hold, restarts: ``on_touch``), power, and time itself (SY7 every
+    # 30 s, the calendar words every second).  While parked, the next task event is at
+    # the first task instant at or after the clock's next event (or that SY7 / calendar
+    # change): no event runs between, so nothing can change before it.  Its sequence
+    # number is taken where the unparked run would take it (at the virtual task before
+    # it, when nothing else runs in between), so the events of its instant run in the
+    # same order as without parking.  An event scheduled from outside a run (a command,
+    # bytes delivered, a test) puts the next task back to the first instant after now,
+    # where the unparked run has it.  The tasks counted meanwhile appear in ``cycles``
+    # and the executor's ``cycles`` and ``skipped`` as soon as their instant is past.
+
+    def _idle(self, program: Executor | None) -> bool:
+        if not self.event_driven or self._bus_pending or self._outputs_touched:
+            return False
+        if program is not None and (
+            not self.running or program.held is not None or program.overrun is not None
+        ):
+            return False
+        if self.txt.busy():
+            return False
+        return not any(entry.module.bus_dirty for entry in self._slots.values())
+
+    def _grid(self, at: int) -> int:
+        """The first task instant at or after ``at``."""
+        return at + (self._phase - at) % self.scan_us
+
+    def _park(self, now: int) -> None:
+        """After an idle real task at ``now``: the next task event moves on (or stays)."""
+        handle = self._scan  # the unparked run's next task, scheduled by this one
+        self._parked = True
+        self._counted_to = now
+        if self.program is not None:
+            self.program.owed = self._owed
+        self.clock.outside_watchers.append(self._realign)
+        at = self._skip_to(now, self.clock.next_deadline_besides(handle))
+        if at != handle.time:  # else it stays, with the sequence number it took
+            handle.cancel()
+            # nothing runs between now and ``at`` but the virtual tasks, so this is the
+            # order the last of them (at ``at`` - scan) would give it
+            self._scan = self.clock.schedule_as(at, self.clock.reserve(), self._end_of_task)
+
+    def _skip_to(self, now: int, top: int | None) -> int:
+        """The next task event: the first task instant at or after the clock's next event
+        ``top`` or the next change of SY7 / the calendar words, at least the next task."""
+        scan = self.scan_us
+        bound = self._time_bound(now)
+        limit = now + PARK_MAX_US if top is None else top
+        if bound is not None:
+            limit = min(limit, bound)
+            self._real_at = self._grid(bound)
+        else:
+            self._real_at = now + PARK_MAX_US + scan
+        return max(now + scan, self._grid(limit))
+
+    def _time_bound(self, now: int) -> int | None:
+        """When the next task would see time itself change something: SY7 (the minute
+        bit, flipping every 30 s) and the calendar words SW51..SW56 (every second),
+        both written only while a program runs."""
+        if self.program is None or not self.running:
+            return None
+        bound = (now // HALF_MINUTE_US + 1) * HALF_MINUTE_US
+        if self.calendar_epoch_s is not None:
+            bound = min(bound, (now // S + 1) * S)
+        return bound
+
+    def _idle_tasks(self, now: int) -> None:
+        """The parked task event fired at ``now`` with nothing changed: the tasks up to
+        ``now`` are counted as skipped, and the next event goes on."""
+        tasks = (now - self._counted_to) // self.scan_us
+        self._cycles += tasks
+        program = self.program
+        if program is not None:
+            program.count_idle(tasks)
+        self._counted_to = now
+        clock = self.clock
+        at = self._skip_to(now, clock.next_deadline())
+        # the sequence number the unparked task at ``now`` would take for the next one
+        self._scan = clock.schedule_as(at, clock.reserve(), self._end_of_task)
+
+    def _owed(self) -> int:
+        """While parked: the idle tasks whose instant is past and not yet counted."""
+        if not self._parked:
+            return 0
+        last = min(self.clock.now, self._scan.time - self.scan_us)
+        return max(0, (last - self._counted_to) // self.scan_us)
+
+    def _realign(self) -> None:
+        """Outside a run: the next task event no later than the first task instant after
+        now (where the unparked run has it), with the sequence number it holds."""
+        handle, at = self._scan, self._grid(self.clock.now + 1)
+        if self._parked and handle.time > at:
+            seq = handle.seq
+            handle.cancel()
+            self._parked = False  # the schedule below tells the watchers: not this one
+            self._scan = self.clock.schedule_as(at, seq, self._end_of_task)
+            self._parked = True
+
+    def _wake(self) -> None:
+        """Something the next task may see changed: it runs at its event."""
+        if self._parked:
+            self._realign()
+            self._unpark()
+
+    def _unpark(self) -> None:
+        """The idle tasks before the task event are counted; the event runs a task."""
+        tasks = (self._scan.time - self._counted_to) // self.scan_us - 1
+        self._cycles += tasks
+        program = self.program
+        if program is not None:
+            program.count_idle(tasks)
+            program.owed = None
+        self._parked = False
+        self.clock.outside_watchers.remove(self._realign)
 
     def _calendar(self, epoch_s: int) -> list[tuple[int, int]]:
         """SW51..SW56 of ``epoch_s``, computed once a second (written at every task)."""
@@ -332,12 +485,14 @@ class Plc:
             self._calendar_words = (epoch_s, list(calendar_words(epoch_s).items()))
         return self._calendar_words[1]
 
-    def _refresh_changed(self, outputs: bool, registers: bool, now: int) -> None:
+    def _refresh_changed(self, outputs: bool, registers: bool, now: int) -> bool:
         """The event-driven bus refresh, with the same result as ``_refresh`` on every
         slot: the outputs are written where the output image differs from what the
         module holds, the input image is read again only from a module whose face
         changed (its images are equal to what a read would give: the property tests
-        in tests/tsx/test_bus_refresh.py), in slot order, as the real PLC does."""
+        in tests/tsx/test_bus_refresh.py), in slot order, as the real PLC does.
+        True if an input image changed."""
+        changed = False
         outputs = outputs or self._outputs_touched
         # a TSX 47-20 odd cycle writes the bits only: the words at the next cycle
         self._outputs_touched = outputs and not registers
@@ -347,6 +502,7 @@ class Plc:
             if not (outputs or module.bus_dirty):
                 continue
             if not entry.present:  # AEM 4.4-1: IWxy,0,8 "module absent", Ixy,S
+                changed = changed or entry.image is not ABSENT
                 entry.image = ABSENT
                 module.bus_dirty = False
                 continue
@@ -365,10 +521,13 @@ class Plc:
                 iw = tuple(module.iw)
                 if image.iw != iw or image.i_bits != i_bits or image.fault != fault:
                     entry.image = BusImage(iw, i_bits, fault)
+                    changed = True
             else:  # TSX 47-20 odd cycle: discrete bits only; the words at the next one
                 self._bus_pending = True
                 if image.i_bits != i_bits or image.fault != fault:
                     entry.image = BusImage(image.iw, i_bits, fault)
+                    changed = True
+        return changed
 
     def _refresh(self, entry: Slot, registers: bool, now: int) -> None:
         """The bus refresh of one slot at every task (``event_driven=False``)."""
@@ -415,6 +574,7 @@ class Plc:
 
     def stop(self) -> None:
         """PLC to STOP: the master task no longer runs (the bus keeps its image)."""
+        self._wake()
         self.running = False
 
     def start(self) -> None:
@@ -425,10 +585,12 @@ class Plc:
                 " (prog load), then plc cold (a cold restart, SY0) or plc hot (SY1,"
                 " SY11 kept); RUN alone is refused"
             )
+        self._wake()
         self.running = True
 
     def cold_restart(self) -> None:
         """SY0: modules re-initialised (AEM 2.5-3), images and Text Blocks cleared."""
+        self._wake()
         present = [e for e in self._slots.values() if e.present]
         for entry in present:  # off first: a module sees the exchange it was doing cut
             entry.module.power_off()
@@ -446,6 +608,7 @@ class Plc:
 
     def hot_restart(self) -> None:
         """SY1: the program resumes; modules and internal objects keep their state."""
+        self._wake()
         if self.program is not None:
             self.program.hot_restart()
         self._clear_fault()
@@ -470,6 +633,7 @@ class Plc:
         if not 0 <= duration_s * S < float("inf"):
             raise ConfigError(f"power break of {duration_s} s not allowed (allowed 0 or more)")
         long_break = seconds(duration_s) > POWER_RESERVE_US
+        self._wake()  # the tasks before the break are counted; none during it
         present = [e for e in self._slots.values() if e.present]
         if long_break:  # off first: a module sees the exchange it was doing cut
             for entry in present:
@@ -478,6 +642,7 @@ class Plc:
         self._powered = False  # no master task, no bus refresh during the break
 
         def power_back() -> None:
+            self._wake()
             self._powered = True
             if long_break:
                 for entry in present:
@@ -533,6 +698,7 @@ class Plc:
 
     def write(self, name: str, value: int) -> None:
         """Write an output object (OWxy,i / OWxy,i,j / Oxy,i) or an internal word Wi."""
+        self._wake()
         w = self._w_address(name)
         if w is not None:
             self.data[w] = to_unsigned(value)
@@ -578,6 +744,8 @@ class Plc:
         text, name = _program_text(path_or_text)
         executor = Executor.from_source(text, self.memory, source=source or name)
         executor.budget = budget_of(self.watchdog_ms)
+        self._wake()
+        executor.on_touch = self._wake
         self.program, self.program_source = executor, text
         if self.fault is not None:  # a new program after the watchdog: a cold restart
             self._clear_fault()
@@ -593,15 +761,18 @@ class Plc:
         if not (0 <= hour < 24 and 0 <= minute < 60 and 0 <= second < 60):
             raise ConfigError(f"time {hour}:{minute}:{second} not allowed")
         epoch = days_from_civil(year, month, day) * 86400 + hour * 3600 + minute * 60 + second
+        self._wake()
         self.calendar_epoch_s = epoch - self.clock.now // S
 
     def unload_program(self) -> None:
+        self._wake()
         self.program = None
         self.program_source = ""
 
     def declare_text_block(self, index: int, declaration: TxtDeclaration) -> None:
         """How TXTi's tables are declared (configuration mode): see plcmemory."""
         self.txt.block(index)  # ConfigError past TXT63
+        self._wake()
         self.memory.declarations[index] = declaration
 
     def slot_entry(self, rack: int, slot: int) -> Slot:
@@ -686,6 +857,7 @@ class Plc:
         (simulated seconds when it ended, else None).  It is validated at the end
         of the master task; advance time (``advance``, ``advance_to``) to see it end.
         """
+        self._wake()
         return self.txt.start(
             m,
             c,
@@ -701,6 +873,7 @@ class Plc:
 
     def reset_text_block(self, txt: int) -> None:
         """The Text Block's R input: the exchange in progress ends with TXTi,S = 1."""
+        self._wake()
         self.txt.reset(txt, self.clock.now)
 
     def exchange(

@@ -197,6 +197,10 @@ class TextBlocks:
             found = self._txts[index] = TextBlock(index)
         return found
 
+    def busy(self) -> bool:
+        """A Text Block is started, in a module or answered (not idle nor done)."""
+        return any(tb.machine.state in _BUSY for tb in self._txts.values())
+
     def end_of_task(self, now: int, running: bool) -> None:
         """Report the answers that came in, then validate the new requests."""
         txts = self._txts.values()
