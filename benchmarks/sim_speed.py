@@ -68,7 +68,8 @@ def alone(kind: str) -> dict[str, Any]:
     out: dict[str, Any] = {"plant": {"name": kind}}
     if kind == "AEM 811 application":  # the module, its discrete modules and the program
         out["plc"] = {k: v for k, v in data["plc"].items() if k != "outputs"}
-        types = ("TSX AEM 811", "TSX DET 805", "TSX DST 1635")
+        # and the DEM 2412, whose stack the program empties (its words are in the program)
+        types = ("TSX AEM 811", "TSX DET 805", "TSX DST 1635", "TSX DEM 2412")
         out["module"] = modules_of(data, *types)
     elif kind.startswith("TES"):
         out["tes"] = [t for t in data["tes"] if t["model"] == kind]
