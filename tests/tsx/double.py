@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 from fieldtwin.clock import S
@@ -79,3 +80,25 @@ class Double(IntelligentModule):
 
 
 registry.register(DOUBLE, Double)
+
+
+@dataclass(frozen=True)
+class Change:
+    """A change of a module's face, a clock event ``at_us`` after the step's start (it
+    may fall on a refresh): the random histories of the PLC's property tests."""
+
+    at_us: int
+    slot: int
+    what: str
+    index: int
+    value: int
+
+
+@dataclass(frozen=True)
+class Command:
+    """What the PLC's user (or a test, or the plant) does between two steps of time."""
+
+    what: str
+    slot: int
+    index: int
+    value: int

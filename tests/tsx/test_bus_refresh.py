@@ -11,14 +11,12 @@ millisecond both show the same images, outputs, cycles and program state.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fieldtwin.tsx.module import IntelligentModule
 from fieldtwin.tsx.plc import Plc
-from tests.tsx.double import CONVERTER, DOUBLE, SENSOR, TERMINAL_BLOCK
+from tests.tsx.double import CONVERTER, DOUBLE, SENSOR, TERMINAL_BLOCK, Change, Command
 
 SLOTS = (1, 2, 3)
 PROGRAM = """%PRE
@@ -29,27 +27,6 @@ PROGRAM = """%PRE
 !EOP
 """
 FAULT_BITS = (3, TERMINAL_BLOCK, CONVERTER, SENSOR)  # blocking, module x2, application
-
-
-@dataclass(frozen=True)
-class Change:
-    """A change of a module, at ``at_us`` (a clock event: it may fall on a refresh)."""
-
-    at_us: int
-    slot: int
-    what: str
-    index: int
-    value: int
-
-
-@dataclass(frozen=True)
-class Command:
-    """What the PLC's user does between two steps of time."""
-
-    what: str
-    slot: int
-    index: int
-    value: int
 
 
 changes = st.builds(

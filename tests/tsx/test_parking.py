@@ -16,7 +16,6 @@ the same outputs at the same instants.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any
 
 from hypothesis import given, settings
@@ -24,7 +23,7 @@ from hypothesis import strategies as st
 
 from fieldtwin.pl7.executor import Hit
 from fieldtwin.tsx.plc import Plc
-from tests.tsx.double import DOUBLE, SENSOR
+from tests.tsx.double import DOUBLE, SENSOR, Change, Command
 
 SLOTS = (1, 2)
 PROGRAMS: dict[str, str] = {
@@ -63,27 +62,6 @@ T: 2>1
 !EOP
 """,
 }
-
-
-@dataclass(frozen=True)
-class Change:
-    """A change of a module's face, a clock event ``at_us`` after the run's start."""
-
-    at_us: int
-    slot: int
-    what: str
-    index: int
-    value: int
-
-
-@dataclass(frozen=True)
-class Command:
-    """What the PLC's user (or a test, or the plant) does between two runs."""
-
-    what: str
-    slot: int
-    index: int
-    value: int
 
 
 changes = st.builds(
