@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Literal, Protocol
 
 from fieldtwin.devices.face import Device, Family, device_id
-from fieldtwin.errors import ConfigError
+from fieldtwin.errors import ConfigError, refuse_unknown_keys
 from fieldtwin.words import parse_word
 
 if TYPE_CHECKING:
@@ -266,11 +266,7 @@ def read_tags(data: Mapping[str, object], name: str, plant: Plant) -> Tags:
 def _tag(table: object, where: str, plant: Plant, devices: Mapping[str, Device]) -> Tag:
     if not isinstance(table, Mapping):
         raise ConfigError(f"{where}: must be a table ([[tag]] with name and object or device)")
-    unknown = sorted(set(table) - set(TAG_KEYS))
-    if unknown:
-        raise ConfigError(
-            f"{where}: unknown key(s) {', '.join(unknown)} (allowed: {', '.join(TAG_KEYS)})"
-        )
+    refuse_unknown_keys(table, TAG_KEYS, where)
     tag_name = _name(table.get("name"), f"{where}.name", devices)
     unit = _text(table.get("unit", ""), f"{where}.unit")
     description = _text(table.get("description", ""), f"{where}.description")

@@ -15,7 +15,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from fieldtwin.errors import ConfigError
+from fieldtwin.errors import ConfigError, refuse_unknown_keys
 
 MAX_ENTRIES = 10_000  # [[step]] and [[expect]] tables together
 MAX_AT_S = 366 * 24 * 3600.0  # a simulated year, as run_until's bound
@@ -156,11 +156,7 @@ def parse_scenario(text: str, name: str = "scenario") -> Scenario:
 
 def scenario_of(data: Mapping[str, object], name: str = "scenario") -> Scenario:
     """A scenario from its tables (as TOML or JSON gives them)."""
-    unknown = sorted(set(data) - set(TOP_KEYS))
-    if unknown:
-        raise ConfigError(
-            f"{name}: unknown key(s) {', '.join(unknown)} (allowed: {', '.join(TOP_KEYS)})"
-        )
+    refuse_unknown_keys(data, TOP_KEYS, name)
     steps_in = _tables(data.get("step", []), f"{name}: step")
     expects_in = _tables(data.get("expect", []), f"{name}: expect")
     if not steps_in and not expects_in:
@@ -327,11 +323,7 @@ def _takes(action: str) -> str:
 
 def _expect(table: Mapping[str, object], index: int, where: str) -> Expect:
     at_s = _at(table, where)
-    unknown = sorted(set(table) - set(EXPECT_KEYS))
-    if unknown:
-        raise ConfigError(
-            f"{where}: unknown key(s) {', '.join(unknown)} (allowed: {', '.join(EXPECT_KEYS)})"
-        )
+    refuse_unknown_keys(table, EXPECT_KEYS, where)
     targets = [k for k in TARGETS if k in table]
     if len(targets) != 1:
         raise ConfigError(

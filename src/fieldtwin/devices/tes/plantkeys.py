@@ -24,7 +24,7 @@ from typing import Any
 
 from fieldtwin.clock import MS, SimClock
 from fieldtwin.endpoint import Endpoint, parse_endpoint
-from fieldtwin.errors import ConfigError
+from fieldtwin.errors import ConfigError, refuse_unknown_keys
 from fieldtwin.modbus.model import Link
 from fieldtwin.signals import analog_from_spec, discrete_from_spec
 from fieldtwin.tes.model import Tes
@@ -66,9 +66,7 @@ def build_one(
     builder sets them through the Device face, fieldtwin.devices.tes)."""
     if not isinstance(table, Mapping):
         raise ConfigError(f"{at}: not a table (allowed keys: {', '.join(KEYS)})")
-    unknown = sorted(set(table) - set(KEYS))
-    if unknown:
-        raise ConfigError(f"{at}: unknown key(s) {', '.join(unknown)} (allowed: {', '.join(KEYS)})")
+    refuse_unknown_keys(table, KEYS, at)
     model = _model(table, at)
     # the number on the port `link` names; absent: the EEPROM's (factory 1, §3.1.2)
     slave = None if "slave" not in table else _slave(table["slave"], f"{at}.slave")
@@ -168,11 +166,7 @@ def _inputs(tes: Tes, inputs: object, at: str, base_dir: Path) -> None:
 def _faults(tes: Tes, faults: object, at: str) -> None:
     if not isinstance(faults, Mapping):
         raise ConfigError(f"{at}: not a table (allowed keys: {', '.join(FAULT_KEYS)})")
-    unknown = sorted(set(faults) - set(FAULT_KEYS))
-    if unknown:
-        raise ConfigError(
-            f"{at}: unknown key(s) {', '.join(unknown)} (allowed: {', '.join(FAULT_KEYS)})"
-        )
+    refuse_unknown_keys(faults, FAULT_KEYS, at)
     for wiring in ("short", "open"):
         for i in _int_list(faults.get(wiring, []), f"{at}.{wiring}"):
             try:
