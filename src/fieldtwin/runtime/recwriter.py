@@ -186,7 +186,7 @@ class RecordWriter:
 def _line(item: object) -> bytes:
     if type(item) is list and item and item[0] in _HOT and set(map(type, item)) <= _PLAIN:
         try:
-            return _DUMPS(item, default=_hex, option=_NEWLINE)
+            return _DUMPS(item, default=_plain, option=_NEWLINE)
         except (TypeError, orjson.JSONEncodeError):
             pass
     text = json.dumps(item, separators=(",", ":"), ensure_ascii=False, default=_plain)
@@ -195,18 +195,12 @@ def _line(item: object) -> bytes:
 
 # The records of the wire, one per chunk in and out (``data``, ``send``: a kind, times,
 # a key and bytes): written by orjson, as json writes them (strings, integers, the
-# bytes as hex by ``_hex``), at a fraction of the cost; a float, which orjson may write
+# bytes as hex by ``_plain``), at a fraction of the cost; a float, which orjson may write
 # differently, or anything else goes through json.
 _HOT = frozenset(("data", "send"))
 _PLAIN = frozenset((str, int, bytes))
 _DUMPS = orjson.dumps
 _NEWLINE = orjson.OPT_APPEND_NEWLINE
-
-
-def _hex(value: object) -> str:
-    if isinstance(value, bytes | bytearray | memoryview):
-        return bytes(value).hex()
-    raise TypeError  # not bytes: json writes it
 
 
 def _plain(value: object) -> object:
