@@ -228,6 +228,8 @@ class Reactor:
     def wait_cap(self) -> float:
         """The longest the next wait may be: shorter while a listener backs off, a real
         transport has no descriptor or output is queued for a transport that has none."""
+        if not (self._retrying or self._polled or self._flushers):
+            return MAX_WAIT_S  # the usual case (sockets and ptys alone): nothing to look at
         cap = MAX_WAIT_S
         if self._retrying:
             soonest = min(e.retry_at or 0.0 for e in self._retrying.values())
@@ -245,8 +247,9 @@ class Reactor:
         O(1) in the number of TCP connections: closes and backlogs are told by
         the transports themselves; only other kinds of transport are scanned.
         """
-        for link in self._polled.copy():
-            self._read(link)
+        if self._polled:
+            for link in self._polled.copy():
+                self._read(link)
         while self._closed:
             link = self._closed.pop()
             if self._links.get(id(link.transport)) is link:

@@ -14,9 +14,11 @@ writing (while output is queued for it), for both, or forgotten.
 from __future__ import annotations
 
 import math
+import select
 import selectors
 import time
 from collections.abc import Collection
+from contextlib import suppress
 from typing import Protocol
 
 Ready = tuple[Collection[int], Collection[int]]  # (readable fds, writable fds)
@@ -80,18 +82,44 @@ _EVENTS = {
 }
 
 
+_EPOLL_MASK = {  # selectors' events -> epoll's
+    selectors.EVENT_READ: select.EPOLLIN if hasattr(select, "epoll") else 0,
+    selectors.EVENT_WRITE: select.EPOLLOUT if hasattr(select, "epoll") else 0,
+}
+
+
+def _epoll_mask(events: int) -> int:
+    return sum(mask for event, mask in _EPOLL_MASK.items() if events & event)
+
+
+# selectors' reading of an epoll event: anything but "writable" (an error, a hang-up)
+# makes a descriptor readable, anything but "readable" makes it writable
+_NOT_OUT = ~_EPOLL_MASK[selectors.EVENT_WRITE]
+_NOT_IN = ~_EPOLL_MASK[selectors.EVENT_READ]
+
+
 class SystemWall:
-    """``time.monotonic`` and one ``selectors.DefaultSelector``, updated incrementally."""
+    """``time.monotonic`` and one epoll set (Linux) or ``selectors.DefaultSelector``
+    (elsewhere, or ``epoll=False``), updated incrementally.
+
+    The epoll set is used directly: selectors' ``select`` builds a key object per ready
+    descriptor and looks it up, a few microseconds of Python per wait that the runner
+    pays once a request at one connection (docs/decisions.md, "The runner's cycle").
+    Both say the same: a descriptor in error or hung up is ready for what it is watched
+    for, as selectors says it."""
 
     fast_poll_s = FAST_POLL_S  # the runner's least wall time between polls while busy
 
-    def __init__(self) -> None:
-        self._selector: selectors.BaseSelector = selectors.DefaultSelector()
+    def __init__(self, epoll: bool = True) -> None:
+        self._epoll = select.epoll() if epoll and hasattr(select, "epoll") else None
+        self._selector: selectors.BaseSelector | None = (
+            None if self._epoll is not None else selectors.DefaultSelector()
+        )
         self._events: dict[int, int] = {}
         self._precise = 0  # how many users want precise waits (want_precision)
 
-    def monotonic(self) -> float:
-        return time.monotonic()
+    # the C function itself, no Python frame around it (called twice a runner cycle)
+    monotonic = staticmethod(time.monotonic)
 
     def watch(self, fd: int, read: bool = True, write: bool = False) -> None:
         if not (read or write):
@@ -101,15 +129,28 @@ class SystemWall:
         old = self._events.get(fd)
         if old == events:
             return
-        if old is None:
+        if self._epoll is not None:
+            mask = _epoll_mask(events)
+            if old is None:
+                self._epoll.register(fd, mask)
+            else:
+                self._epoll.modify(fd, mask)
+        elif old is None:
+            assert self._selector is not None
             self._selector.register(fd, events)
         else:
+            assert self._selector is not None
             self._selector.modify(fd, events)
         self._events[fd] = events
 
     def forget(self, fd: int) -> None:
         if self._events.pop(fd, None) is not None:
-            self._selector.unregister(fd)  # an fd closed already: the selector shrugs
+            if self._epoll is not None:
+                with suppress(OSError):  # an fd closed already (as selectors shrugs)
+                    self._epoll.unregister(fd)
+            else:
+                assert self._selector is not None
+                self._selector.unregister(fd)  # an fd closed already: the selector shrugs
 
     @property
     def watched(self) -> int:
@@ -158,6 +199,24 @@ class SystemWall:
     def _select(self, timeout: float | None) -> Ready:
         readable: list[int] = []
         writable: list[int] = []
+        epoll = self._epoll
+        if epoll is not None:
+            # as selectors.EpollSelector: no timeout is -1, a timeout rounded up to a ms
+            if timeout is None:
+                wait = -1.0
+            elif timeout <= 0:
+                wait = 0.0
+            else:
+                wait = math.ceil(timeout * 1e3) * 1e-3
+            events = self._events
+            for fd, got in epoll.poll(wait, max(len(events), 1)):
+                wanted = events.get(fd, 0)
+                if got & _NOT_OUT and wanted & selectors.EVENT_READ:
+                    readable.append(fd)
+                if got & _NOT_IN and wanted & selectors.EVENT_WRITE:
+                    writable.append(fd)
+            return readable, writable
+        assert self._selector is not None
         for key, mask in self._selector.select(timeout):
             if mask & selectors.EVENT_READ:
                 readable.append(key.fd)
@@ -166,5 +225,9 @@ class SystemWall:
         return readable, writable
 
     def close(self) -> None:
-        self._selector.close()
+        if self._epoll is not None:
+            self._epoll.close()
+        else:
+            assert self._selector is not None
+            self._selector.close()
         self._events.clear()
