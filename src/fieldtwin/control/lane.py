@@ -44,6 +44,7 @@ from fieldtwin.control.guards import MAX_BODY, SECURITY_HEADERS, BrowserGate, To
 from fieldtwin.control.sim import Sim
 
 PATHS_KEPT = 1024  # paths whose route the lane remembers; then forgotten (bounded)
+HOSTS_KEPT = 64  # Host headers whose verdict the lane remembers; then forgotten (bounded)
 JSON_TYPES = frozenset({b"application/json", b"application/json; charset=utf-8"})
 Call = tuple[str, tuple[object, ...]]
 
@@ -56,14 +57,19 @@ R = TypeVar("R", bound=BaseModel)
 class LaneRoute(Generic[B, R]):
     """One route the lane may answer: its method and path as the router declares them,
     its body's model, the command it runs (from the path's parameters and the body) and
-    the route's answer made from the command's.  The router's endpoint uses the same
-    ``call`` and ``reply``: the two ways cannot drift apart."""
+    the model of the route's answer (the command's answer validated into it).  The
+    router's endpoint uses the same ``call`` and ``reply``, and the route must declare
+    ``reply`` as its response model: the two ways cannot drift apart."""
 
     method: str
     path: str
     body: type[B]
     call: Callable[[Mapping[str, Any], B], Call]
-    reply: Callable[[Any], R]
+    reply: type[R]
+
+    def answer(self, value: Any) -> R:
+        """The route's answer: the command's validated into the reply model."""
+        return self.reply.model_validate(value)
 
 
 @dataclass(frozen=True)
@@ -104,6 +110,7 @@ class FastLane:
         self.methods = frozenset(lane.method for lane in routes)
         # (the route's way, its path parameters) by (method, root path, path), or _NONE
         self._paths: dict[tuple[str, str, str], tuple[_Way, dict[str, Any]] | object] = {}
+        self._hosts: dict[bytes, bool] = {}  # BrowserGate.host_ok by Host header
         self.answered = 0  # requests the lane answered (the rest fell through)
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
@@ -130,8 +137,10 @@ class FastLane:
         self.answered += 1
         name, args = way.lane.call(params, model)
         try:
-            answer = way.lane.reply(await self.sim.command(name, *args))
-            data = _serialized(way.route, answer)
+            # the route's response field validates the command's answer into the reply
+            # model and writes it (one validation, where the endpoint's model_validate
+            # and FastAPI's serialize_response make two of the same)
+            data = _serialized(way.route, await self.sim.command(name, *args))
         except Exception as exc:
             handler = _handler(self.api, exc)
             if handler is None:
@@ -186,7 +195,15 @@ class FastLane:
         if len(headers) != len(raw):
             return False  # a header given twice: let the gates judge it
         host = headers.get(b"host")
-        if host is None or not self.doors.host_ok(host.decode("latin-1")):
+        if host is None:
+            return False
+        known = self._hosts.get(host)
+        if known is None:  # the gate's answer for this Host, remembered (bounded)
+            known = self.doors.host_ok(host.decode("latin-1"))
+            if len(self._hosts) >= HOSTS_KEPT:
+                self._hosts.clear()
+            self._hosts[host] = known
+        if not known:
             return False
         if b"origin" in headers or b"sec-fetch-site" in headers:
             return False
@@ -213,6 +230,11 @@ def _route(api: FastAPI, lane: LaneRoute[Any, Any]) -> APIRoute:
             and route.path_format == lane.path
             and lane.method in (route.methods or ())
         ):
+            if route.response_model is not lane.reply:
+                raise ValueError(
+                    f"{lane.method} {lane.path} answers {route.response_model!r}, the fast"
+                    f" lane {lane.reply!r}: they must be the same model"
+                )
             return route
     raise ValueError(f"no route {lane.method} {lane.path} for the fast lane")
 
