@@ -32,7 +32,7 @@ from __future__ import annotations
 import inspect
 import secrets
 from collections.abc import Callable, Hashable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from fastapi import FastAPI
@@ -52,6 +52,8 @@ if TYPE_CHECKING:
 
 PATHS_KEPT = 1024  # paths whose route the lane remembers; then forgotten (bounded)
 HOSTS_KEPT = 64  # Host headers whose verdict the lane remembers; then forgotten (bounded)
+ANSWERS_KEPT = 256  # answers written, remembered per route; then forgotten (bounded)
+_PLAIN = frozenset({str, bool, int})  # the value types whose JSON their type and == fix
 JSON_TYPES = frozenset({b"application/json", b"application/json; charset=utf-8"})
 Call = tuple[str, tuple[object, ...]]
 
@@ -103,6 +105,8 @@ class _Way:
     lane: LaneRoute[Any, Any] | LaneRead[Any]
     route: APIRoute
     body: TypeAdapter[Any] | None  # the body's model (None: a read, no body)
+    # answers as the route writes them, by their _plain key (bounded: ANSWERS_KEPT)
+    written: dict[tuple[object, ...], bytes] = field(default_factory=dict)
 
 
 _NONE = object()  # a path remembered as not the lane's
@@ -175,8 +179,16 @@ class FastLane:
                 answer = await self.sim.command(name, *args)
             # the route's response field validates the answer into the reply model and
             # writes it (one validation, where the endpoint's model_validate and
-            # FastAPI's serialize_response make two of the same)
-            data = _serialized(way.route, answer)
+            # FastAPI's serialize_response make two of the same); an answer of plain
+            # strings, booleans and whole numbers is written once and remembered
+            key = _plain(answer)
+            data = way.written.get(key) if key is not None else None
+            if data is None:
+                data = _serialized(way.route, answer)
+                if key is not None:
+                    if len(way.written) >= ANSWERS_KEPT:
+                        way.written.clear()
+                    way.written[key] = data
         except Exception as exc:
             handler = _handler(self.api, exc)
             if handler is None:
@@ -225,10 +237,8 @@ class FastLane:
         request: the whole stack judges it, CORS included), and the token when one is
         set; with a ``body``, a JSON Content-Type and a declared length within the
         bound; without (a read), no body declared at all."""
-        headers: dict[bytes, bytes] = {}
         raw = scope["headers"]
-        for key, value in raw:
-            headers[key] = value
+        headers: dict[bytes, bytes] = dict(raw)
         if len(headers) != len(raw):
             return False  # a header given twice: let the gates judge it
         host = headers.get(b"host")
@@ -313,6 +323,20 @@ def _replay(read: list[Message], then: Receive) -> Receive:
         return await then()
 
     return receive
+
+
+def _plain(answer: Any) -> tuple[object, ...] | None:
+    """A key that fixes ``answer``'s JSON (its keys in order, each value's type and value)
+    when it is a dict of strings, booleans and whole numbers; else None.  Equal keys
+    give the same body: ``True``, ``1`` and ``1.0`` differ by type, and a float (``-0.0``
+    equals ``0.0``) or a container is never keyed."""
+    if type(answer) is not dict:
+        return None
+    values = tuple(answer.values())
+    types = tuple(map(type, values))
+    if not _PLAIN.issuperset(types):
+        return None
+    return (tuple(answer), types, values)
 
 
 def _serialized(route: APIRoute, content: Any) -> bytes:
