@@ -13,8 +13,9 @@ a subscriber (issue 11), and the API against references (issue 26).
   machine's load drifts during a run), beside each server's CPU time per request
   (its process's user + system time over the requests wrk counted: Linux), which a
   machine shared with other jobs disturbs far less than requests per second; the
-  load average is printed before and after.  Every server runs uvicorn with the
-  same settings (its HTTP parser: httptools when installed, else h11: printed);
+  load average is printed before and after.  Every uvicorn server takes uvicorn's
+  default HTTP parser and loop (httptools and uvloop when installed, else h11 and
+  asyncio's: printed); pymodbus's REST API runs on asyncio's loop, its default;
 * a closed loop of one ``httpx`` client (one connection) on the same two requests;
 * event stream: events published on an EventBus as fast as one thread can, carried
   by the real WebSocket endpoint (uvicorn in a thread) to a websockets client:
@@ -162,6 +163,12 @@ def http_parser() -> str:
     return "httptools" if importlib.util.find_spec("httptools") else "h11"
 
 
+def event_loop() -> str:
+    """The event loop uvicorn's default ("auto") takes here (pymodbus's REST API runs on
+    asyncio's own, its default)."""
+    return "uvloop" if importlib.util.find_spec("uvloop") else "asyncio"
+
+
 def wrk_rate(url: str, method: str, body: object, seconds: float) -> tuple[float, int]:
     """Requests/s by wrk, and how many requests (every answer must be a 2xx: asserted)."""
     with tempfile.NamedTemporaryFile("w", suffix=".lua", delete=False) as script:
@@ -250,7 +257,7 @@ def against_references(server: tuple[str, int], seconds: float) -> None:
     tool = "wrk" if shutil.which("wrk") else f"{CONNECTIONS} client processes"
     print(
         f"load: {tool}, {CONNECTIONS} connections; median of {ROUNDS} rounds of {seconds:g} s,"
-        f" alternated; uvicorn's HTTP parser: {http_parser()}"
+        f" alternated; uvicorn's HTTP parser: {http_parser()}, its loop: {event_loop()}"
     )
     print(f"load average before: {_load()}")
     bare_port = free_port()

@@ -1,8 +1,9 @@
-"""The fast lane of ``PUT .../inputs/NAME`` and ``PUT .../objects/NAME`` answers exactly as
-the whole stack (gates, FastAPI's router, the route) does: the same random requests -
-valid and invalid bodies, Content-Types, Host, Origin and Sec-Fetch-Site headers, tokens,
-paths - sent to a plant served with the lane and to its twin served without get the same
-status, headers and body, and the two plants' doors see the same commands."""
+"""The fast lane of ``PUT .../inputs/NAME`` and ``PUT .../objects/NAME`` (commands) and of
+``GET /clock`` (a read from the snapshot) answers exactly as the whole stack (gates,
+FastAPI's router, the route) does: the same random requests - valid and invalid bodies,
+Content-Types, Host, Origin and Sec-Fetch-Site headers, tokens, paths, methods - sent to a
+plant served with the lane and to its twin served without get the same status, headers
+and body, and the two plants' doors see the same commands."""
 
 from __future__ import annotations
 
@@ -249,15 +250,29 @@ HAPPY = st.builds(
     token=st.sampled_from(["bearer", "cookie"]),
     twice=st.none(),
 )
+# a read the lane answers itself from the snapshot (GET /clock): no body; a Content-Type
+# the gates do not look at on a read
+HAPPY_READ = st.builds(
+    Ask,
+    method=st.just("GET"),
+    path=st.sampled_from(["/clock", "/clock?x=1", "/clock?token=" + TOKEN]),
+    body=st.just(b""),
+    content_type=st.sampled_from([None, None, "application/json", "text/plain"]),
+    host=st.sampled_from(["own", "localhost"]),
+    origin=st.none(),
+    fetch_site=st.none(),
+    token=st.sampled_from(["bearer", "cookie"]),
+    twice=st.none(),
+)
 FIELDS = [f for f in Ask.__dataclass_fields__]
 # a valid request but for one thing, and anything at all
 ONE_OFF = st.builds(
     lambda happy, other, name: replace(happy, **{name: getattr(other, name)}),
-    HAPPY,
+    st.one_of(HAPPY, HAPPY_READ),
     ANY,
     st.sampled_from(FIELDS),
 )
-ASKS = st.one_of(HAPPY, ONE_OFF, ANY)
+ASKS = st.one_of(HAPPY, HAPPY_READ, ONE_OFF, ANY)
 
 
 def _answer(served: Served, http: httpx.Client, ask: Ask) -> tuple[object, ...]:
@@ -291,8 +306,9 @@ def test_the_lane_answers_as_the_whole_stack(
 
 
 def test_the_lane_takes_the_happy_path_only(twins: dict[bool, tuple[Served, Served]]) -> None:
-    """The lane answers a valid request itself (what the property test compares is the
-    lane's answer, not the stack's twice), and hands on what it must not answer."""
+    """The lane answers a valid request itself, a command or the clock's read (what the
+    property test compares is the lane's answer, not the stack's twice), and hands on
+    what it must not answer."""
     lane, _ = twins[True]
     assert isinstance(lane.server.app, FastLane)
     gate: FastLane = lane.server.app
@@ -310,6 +326,15 @@ def test_the_lane_takes_the_happy_path_only(twins: dict[bool, tuple[Served, Serv
             http.put("/devices/tes9/inputs/3", json={"value": 1}, headers=good).status_code == 404
         )
         assert gate.answered == before + 3  # the 404 too: the command ran and refused it
+        clock = http.get("/clock", headers={"authorization": f"Bearer {TOKEN}"})
+        assert clock.status_code == 200 and clock.json()["t_us"] == 0
+        assert gate.answered == before + 4  # a read from the snapshot
+        bearer = {"authorization": f"Bearer {TOKEN}"}
+        assert http.get("/clock").status_code == 401  # no token
+        assert http.get("/clock", headers={**bearer, "sec-fetch-site": "cross-site"}).is_error
+        http.get("/clock", headers={**bearer, "origin": "http://evil.example"})  # CORS's
+        http.request("GET", "/clock", headers=bearer, content=b"{}")  # a body on a read
+        assert gate.answered == before + 4
         for refused, headers in (
             ({"value": True}, {"content-type": "application/json"}),  # no token: 401
             ({"valu": True}, good),  # not the route's body: 422
@@ -318,4 +343,4 @@ def test_the_lane_takes_the_happy_path_only(twins: dict[bool, tuple[Served, Serv
         ):
             status = http.put("/devices/tes1/inputs/3", json=refused, headers=headers).status_code
             assert status in (401, 403, 415, 422)
-        assert gate.answered == before + 3
+        assert gate.answered == before + 4

@@ -203,7 +203,7 @@ def create_app(
     gated = BodyLimit(doors)
     if not lane:
         return gated
-    return FastLane(gated, app, sim, LANE, doors=doors, token=gate)
+    return FastLane(gated, app, hop, LANE, doors=doors, token=gate)
 
 
 __all__ = ["create_app"]

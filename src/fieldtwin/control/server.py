@@ -99,6 +99,15 @@ class ControlServer:
             log_level="warning",
             lifespan="off",
             access_log=False,
+            # uvloop where installed (a dependency on POSIX), else asyncio's own loop: the
+            # loop of this thread only (uvicorn makes it by a factory, no global policy)
+            loop="auto",
+            # the server faces its clients directly: no X-Forwarded-* header from a local
+            # process rewrites a request's scheme or client (the Origin check reads the
+            # scheme), and no Server header goes out (docs/decisions.md, "The control
+            # API's PUT: its loop and uvicorn's options")
+            proxy_headers=False,
+            server_header=False,
             ws_max_size=65536,
             ws_per_message_deflate=False,  # the events are sent as they are (loopback)
         )

@@ -57,12 +57,14 @@ def serve(door: Door, control: object, console: Handler | None = None) -> Callab
     :data:`COMMANDS`, and its console lines with ``console`` (the API's console's
     ``handle``); the function returned withdraws them."""
 
+    methods: dict[str, Callable[..., object]] = {name: getattr(control, name) for name in COMMANDS}
+
     def run(command: Command) -> object:
-        if command.name not in COMMANDS:
+        method = methods.get(command.name)
+        if method is None:
             raise ConfigError(
                 f"{command.name[:40]!r} is not a control command (allowed: {', '.join(COMMANDS)})"
             )
-        method: Callable[..., object] = getattr(control, command.name)
         return method(*command.args)
 
     withdraw = [door.serve(CALL, run)]

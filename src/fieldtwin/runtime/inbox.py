@@ -26,7 +26,7 @@ from collections import deque
 from collections.abc import Callable
 from concurrent.futures import Future
 from dataclasses import dataclass
-from typing import Any, Protocol, TypeVar
+from typing import Any, NamedTuple, Protocol, TypeVar
 
 from fieldtwin.errors import FieldtwinError
 from fieldtwin.runtime.door import Command, Door
@@ -65,8 +65,7 @@ class Ticket:
     withdrawn: bool = False  # its requester gave up before its turn (idem)
 
 
-@dataclass(frozen=True, slots=True)
-class _Command:
+class _Command(NamedTuple):  # a tuple: made at each request, the cheapest to make
     run: Callable[[], Any] | Command
     future: Future[Any] | Ticket
     then: Callable[[Any], Any] | None = None  # the answer's reading, in the same turn

@@ -22,7 +22,8 @@ from fieldtwin.control.routers import (
 )
 
 GROUPS = (plant, clock, devices, faults, objects, plc, scenarios, console, dashboard, tags)
-# the hot command routes the fast lane answers on their happy path (fieldtwin.control.lane)
-LANE = (devices.SET_INPUT, objects.WRITE_OBJECT)
+# the hot routes the fast lane answers on their happy path (fieldtwin.control.lane): two
+# commands, and the clock read from the snapshot
+LANE = (devices.SET_INPUT, objects.WRITE_OBJECT, clock.CLOCK)
 
 __all__ = ["GROUPS", "LANE"]

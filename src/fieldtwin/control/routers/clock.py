@@ -5,9 +5,14 @@ from __future__ import annotations
 
 from fastapi import APIRouter
 
+from fieldtwin.control.lane import LaneRead
 from fieldtwin.control.replies import ClockEvent, ClockJson
 from fieldtwin.control.routers.common import REPLY, Hop, mode
 from fieldtwin.control.schemas import RunUntilBody, SpeedBody, StepBody
+
+# the clock from the snapshot: the route below and the fast lane in front of the router
+# (control/lane.py)
+CLOCK: LaneRead[ClockJson] = LaneRead("/clock", lambda c, at: ("clock", c.clock_json), ClockJson)
 
 
 def router(hop: Hop) -> APIRouter:
@@ -16,7 +21,7 @@ def router(hop: Hop) -> APIRouter:
 
     @api.get("", summary="simulated time, paused or not, speed", **REPLY)
     async def clock() -> ClockJson:
-        return ClockJson.model_validate(await hop.read("clock", c.clock_json))
+        return CLOCK.answer(await hop.read(*CLOCK.read(c, {})))
 
     @api.post("/pause", summary="hold simulated time", **REPLY)
     async def pause() -> ClockEvent:
@@ -44,4 +49,4 @@ def router(hop: Hop) -> APIRouter:
     return api
 
 
-__all__ = ["router"]
+__all__ = ["CLOCK", "router"]

@@ -15,7 +15,7 @@ SET_INPUT: LaneRoute[InputBody, InputSet] = LaneRoute(
     "/devices/{ident}/inputs/{name}",
     InputBody,
     lambda at, body: ("set_input", (at["ident"], at["name"], body.value, body.signal)),
-    InputSet.model_validate,
+    InputSet,
 )
 
 
@@ -43,7 +43,7 @@ def router(hop: Hop) -> APIRouter:
     @api.put("/inputs/{name}", summary="set an input, or drive it by a signal", **REPLY)
     async def set_input(ident: str, name: str, body: InputBody) -> InputSet:
         command, args = SET_INPUT.call({"ident": ident, "name": name}, body)
-        return SET_INPUT.reply(await hop.do(command, *args))
+        return SET_INPUT.answer(await hop.do(command, *args))
 
     @api.get(
         "/outputs",

@@ -16,7 +16,7 @@ WRITE_OBJECT: LaneRoute[ObjectBody, ObjectValue] = LaneRoute(
     "/devices/{ident}/objects/{name}",
     ObjectBody,
     lambda at, body: ("write_object", (at["ident"], at["name"], body.value)),
-    ObjectValue.model_validate,
+    ObjectValue,
 )
 
 
@@ -39,7 +39,7 @@ def router(hop: Hop) -> APIRouter:
     @api.put("/{name}", summary="write an object", **REPLY)
     async def write_object(ident: str, name: str, body: ObjectBody) -> ObjectValue:
         command, args = WRITE_OBJECT.call({"ident": ident, "name": name}, body)
-        return WRITE_OBJECT.reply(await hop.do(command, *args))
+        return WRITE_OBJECT.answer(await hop.do(command, *args))
 
     return api
 
