@@ -85,6 +85,10 @@ class Inbox:
         self._writer.setblocking(False)
         self._queue: deque[_Command] = deque()
         self._lock = threading.Lock()
+        # wakeups sent (counted under the lock, after the byte) and those the runner
+        # has read past: it reads the descriptor only when they differ, not every cycle
+        self._sent = 0
+        self._drained = 0
         self.closed = False
         self.executed = 0  # commands run so far
         self._turn: dict[Replies, list[Answer]] | None = None  # the answers of the turn
@@ -132,6 +136,7 @@ class Inbox:
         ``submit_ticket(..., wake=False)``)."""
         with contextlib.suppress(BlockingIOError, OSError):  # full of wakeups, or closed
             self._writer.send(b"\0")
+        self._count_wakeup()
 
     def withdraw(self, ticket: Ticket) -> bool:
         """From any thread: ``ticket``'s command will not run, if its turn has not come
@@ -155,7 +160,13 @@ class Inbox:
         if wake and wake_now:
             with contextlib.suppress(BlockingIOError):  # full of wakeups already: it will look
                 self._writer.send(b"\0")
+            self._count_wakeup()
         return wake
+
+    def _count_wakeup(self) -> None:
+        """After a wakeup byte is sent (or the descriptor was full of them)."""
+        with self._lock:
+            self._sent += 1
 
     def __len__(self) -> int:
         return len(self._queue)
@@ -163,7 +174,12 @@ class Inbox:
     def run_pending(self) -> int:
         """On the simulation's thread: run what was submitted before now; how many ran.
         The tickets' answers leave together at the end, by their ``Replies``."""
-        self._drain_wakeups()
+        sent = self._sent
+        if sent != self._drained:  # a wakeup was sent since the last read: read them all
+            self._drained = sent
+            self._drain_wakeups()
+        elif not self._queue:
+            return 0  # nothing sent, nothing waiting: no system call, no lock
         with self._lock:
             commands = list(self._queue)
             self._queue.clear()
@@ -241,10 +257,12 @@ class Inbox:
         return bool(ready) or bool(self._queue)
 
     def _drain_wakeups(self) -> None:
-        # one read takes every wakeup (one is sent per empty queue, so a few at most);
-        # a wakeup sent after it leaves the descriptor readable: one more turn, harmless
+        # one read takes every wakeup (one is sent per empty queue, so a few at most),
+        # more if a read comes back full (the runner reads again only once the count of
+        # wakeups sent moves); a wakeup sent after it counts: one more turn, harmless
         with contextlib.suppress(BlockingIOError, OSError):
-            self._reader.recv(WAKEUPS_READ)
+            while len(self._reader.recv(WAKEUPS_READ)) == WAKEUPS_READ:
+                pass  # more than one read's worth (bounded: the queue is): read on
 
     def close(self) -> None:
         """No more commands; those still waiting fail with InboxClosed."""
