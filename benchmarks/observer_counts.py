@@ -12,7 +12,8 @@ process; the difference per request is printed:
   writer, one or four ``/events`` subscriptions of every kind with their answers;
 * ``post``: the simulation's thread: a real TES 32EST's wiretap (``seen_in``,
   ``seen_out``: the raw records and the TES states) on a started bus's buffer;
-* ``ship``: the plant's observers' thread: the buffer taken and pickled for the pipe;
+* ``ship``: the same and the plant's observers' thread: the buffer taken and pickled
+  for the pipe (``post`` and ``ship`` less the workload's own loop over the traffic);
 * ``reader1``: the plant's reader thread and the web server for one subscriber: the
   child's answers unpickled into the subscription's queue, taken and joined into the
   ``batch=1`` messages.
@@ -121,6 +122,8 @@ def workload(part: str, requests: int, kind: str, data: str | None) -> None:
         _post(requests, kind, ship=False)
     elif part == "ship":
         _post(requests, kind, ship=True)
+    elif part == "loop":
+        _post(requests, kind, ship=False, tapped=None)
     elif part == "reader1":
         assert data is not None
         _reader(data)
@@ -144,7 +147,7 @@ class _Pipe:
         pass
 
 
-def _post(requests: int, kind: str, ship: bool) -> None:
+def _post(requests: int, kind: str, ship: bool, tapped: bool | None = True) -> None:
     """The simulation's side: a TES 32EST's wiretap on a bus whose buffer is taken every
     ``PER_MESSAGE`` records; ``ship``: and pickled (else the buffer is only emptied)."""
     from fieldtwin.clock import SimClock
@@ -164,6 +167,8 @@ def _post(requests: int, kind: str, ship: bool) -> None:
     streams = [tap.stream(f"127.0.0.1:{40000 + c}") for c in range(CONNS)]
     feed = bus._feed
     for conn, request, answer, now in traffic(requests, kind):
+        if tapped is None:  # the loop alone: what ``post`` and ``ship`` take off
+            continue
         stream = streams[conn]
         stream.seen_in(request, now)
         stream.seen_out(answer, now)
@@ -227,6 +232,7 @@ def main() -> None:
     unknown = set(parts) - set(PARTS)
     if unknown:
         raise SystemExit(f"--parts: any of {', '.join(PARTS)}")
+    loop: float | None = None  # instructions per request of the post workload's own loop
     with tempfile.TemporaryDirectory(prefix="obscounts_") as tmp:
         for part in parts:
             counted = []
@@ -243,6 +249,13 @@ def main() -> None:
                 counted.append(count(argv))
             small, large = counted
             per = (large.instructions - small.instructions) / (large.units - small.units)
+            if part in ("post", "ship"):  # the workload's own loop taken off
+                if loop is None:
+                    argv = [sys.executable, __file__, "--part", "loop", "--traffic", args.traffic]
+                    a = count([*argv, "--workload", str(SMALL)])
+                    b = count([*argv, "--workload", str(LARGE)])
+                    loop = (b.instructions - a.instructions) / (b.units - a.units)
+                per -= loop
             print(
                 f"{part:<8} {per:>10,.0f} instructions per request ({tool()}, {args.traffic})",
                 flush=True,

@@ -87,8 +87,14 @@ def tcp_packet(
     builds (``dpkt_packet``; a test compares them), made with struct at a tenth of
     the cost (the pcap writer builds one per frame)."""
     length = 20 + 20 + len(data)
-    ip = _IP.pack(0x45, 0, length, 0, 0, 64, 6, 0, src[0], dst[0])
-    ip = _IP.pack(0x45, 0, length, 0, 0, 64, 6, _checksum(ip), src[0], dst[0])
+    key = (src[0], dst[0], length)
+    ip = _IP_HEADERS.get(key)
+    if ip is None:  # a connection's frames are of a few lengths: their headers kept
+        ip = _IP.pack(0x45, 0, length, 0, 0, 64, 6, 0, src[0], dst[0])
+        ip = _IP.pack(0x45, 0, length, 0, 0, 64, 6, _checksum(ip), src[0], dst[0])
+        if len(_IP_HEADERS) >= 4096:
+            _IP_HEADERS.clear()
+        _IP_HEADERS[key] = ip
     tcp = _TCP.pack(src[1], dst[1], seq, ack, 0x50, flags, WINDOW, 0, 0)
     pseudo = src[0] + dst[0] + _PSEUDO.pack(6, 20 + len(data))
     tcp = _TCP.pack(
@@ -101,6 +107,7 @@ def tcp_packet(
 _IP = struct.Struct(">BBHHHBBH4s4s")
 _TCP = struct.Struct(">HHIIBBHHH")
 _PSEUDO = struct.Struct(">xBH")
+_IP_HEADERS: dict[tuple[bytes, bytes, int], bytes] = {}  # (source, destination, length)
 _TO_SERVER = SERVER_MAC + CLIENT_MAC + b"\x08\x00"
 _TO_CLIENT = CLIENT_MAC + SERVER_MAC + b"\x08\x00"
 

@@ -11,8 +11,13 @@ Framing, decoding and building the events happen on the observers' side
 wiretap's own copy of the framing (an MBAP decoder per TCP connection, an RTU
 framer with the core's own timing per RTU stream), so it never changes what the
 core does.  The pump asks ``bus.watched`` first: an unobserved plant pays one
-attribute read per chunk.  The pure decoding helpers (a frame's fields, a TES's
-state and the outcome it gives) are in fieldtwin.runtime.wirecodec, re-exported here.
+attribute read per chunk.  A TCP frame that comes whole in its chunk (the usual case)
+is decoded once per connection and remembered by its bytes after the transaction
+number (and, for a request, the TES states it met; for a reply, its request): the
+next such frame gets the same fields and JSON with its own transaction number and
+bytes (``Stream.fast``; tests/trace/test_wire_memo.py).  The pure decoding helpers
+(a frame's fields, a TES's state and the outcome it gives) are in
+fieldtwin.runtime.wirecodec, re-exported here.
 
 ``CharTap`` publishes the characters of an SCM channel in and out, one event
 per block the line delivered.
