@@ -250,16 +250,25 @@ class EventBus:
         elif op == OP_FORGET:
             self._streams.pop(record[1], None)
 
-    def deliver(self, t_us: int, kind: str, device: str, data: Mapping[str, object]) -> None:
-        """One event to every subscription that wants it (the observers' side)."""
+    def deliver(
+        self,
+        t_us: int,
+        kind: str,
+        device: str,
+        data: Mapping[str, object],
+        body: str | None = None,
+    ) -> None:
+        """One event to every subscription that wants it (the observers' side);
+        ``body``: its JSON but the time, when known (``Event.body``)."""
         subs = self._subs
         if not subs:
             return
-        event = Event(t_us, kind, device, data)
+        event = Event(t_us, kind, device, data, body)
         self.published += 1
         inline = self._feed is None and not self.deferred
         for sub in subs:
-            if sub.wants(event):
+            kinds, devices = sub.kinds, sub.devices  # ``sub.wants(event)``, inline
+            if (kinds is None or kind in kinds) and (devices is None or device in devices):
                 sub._put(event, inline)
 
     def process(self) -> int:

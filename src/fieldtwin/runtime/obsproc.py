@@ -24,7 +24,15 @@ from typing import IO, Any
 
 from fieldtwin.runtime.events import EventBus, Subscription
 from fieldtwin.runtime.obslink import read_message, say, write_message
-from fieldtwin.runtime.obsrecords import OP_STREAM, OP_SUB, OP_TAP, OP_UNSUB, OP_WRITE
+from fieldtwin.runtime.obsrecords import (
+    OP_IN,
+    OP_OUT,
+    OP_STREAM,
+    OP_SUB,
+    OP_TAP,
+    OP_UNSUB,
+    OP_WRITE,
+)
 from fieldtwin.runtime.pcap import PcapWriter
 from fieldtwin.runtime.trace import TraceWriter
 from fieldtwin.runtime.wiretap import Wiretap
@@ -48,9 +56,19 @@ class Observers:
         if lost:
             for sub in bus._subs:
                 sub._lost(lost)
+        streams = bus._streams
         for record in records:
             try:
-                if record[0] < OP_TAP:
+                op = record[0]
+                if op == OP_IN:  # the two usual records straight to their stream
+                    stream = streams.get(record[1])
+                    if stream is not None:
+                        stream.inbound(record[2], record[3], record[4])
+                elif op == OP_OUT:
+                    stream = streams.get(record[1])
+                    if stream is not None:
+                        stream.outbound(record[2], record[3])
+                elif op < OP_TAP:
                     bus.handle(record)
                 else:
                     self.control(record)

@@ -71,18 +71,43 @@ def event_json(t_us: int, kind: str, device: str, data: Mapping[str, object]) ->
     return '{"t_s":' + repr(t_us / 1e6) + "," + body[1:].decode()
 
 
+def template(
+    kind: str, device: str, data: Mapping[str, object], cut: str
+) -> tuple[str, str] | None:
+    """A frame's JSON body cut around its two per-frame fields: ``(head, tail)`` with
+    ``head + str(number) + ',"hex":"' + hex + tail`` the text ``plain_body`` writes
+    (from after its opening brace) for ``data`` with ``data[cut] = number`` and
+    ``data["hex"] = hex``, the key ``cut`` directly followed by ``"hex"``; None when
+    ``plain_body`` would not write it (fieldtwin.runtime.wiretap's remembered frames)."""
+    keys = list(data)
+    at = keys.index(cut) if cut in data else -1
+    if at < 0 or keys[at + 1 : at + 2] != ["hex"] or {"t", "wall", "t_s"} & set(keys):
+        return None
+    head = dict(list(data.items())[:at])
+    rest = dict(list(data.items())[at + 2 :])
+    first = plain_body(kind, device, head)
+    last = plain_body(kind, device, rest)
+    if first is None or last is None:
+        return None
+    tail = last[len(_DUMPS({"kind": kind, "device": device})) - 1 :].decode()  # "}" or ",…}"
+    return first[1:-1].decode() + ',"' + cut + '":', '"' + tail
+
+
 @dataclass(slots=True)
 class Event:
     """One thing that happened: when (simulated us), what kind, on which device, its fields.
 
     Treated as a value, never changed once made (not a frozen dataclass only because a
-    frozen one's ``__init__`` costs three times as much, once per frame observed)."""
+    frozen one's ``__init__`` costs three times as much, once per frame observed).
+    ``body``, when its maker knows it, is its JSON but the time: ``plain_body``'s text
+    after the opening brace (a wiretap's frame, made from a remembered template)."""
 
     t_us: int
     kind: str  # "modbus", "serial", "object", "led", "dem", "register", "clock", ...
     device: str  # the device's address as the Device face writes it ("5", "tcp://...:5020 1")
     data: Mapping[str, object]
-    _text: list[str] = field(default_factory=list, compare=False, repr=False)
+    body: str | None = field(default=None, compare=False, repr=False)
+    _json: str | None = field(default=None, compare=False, repr=False)
 
     def as_dict(self) -> dict[str, object]:
         return {"t_s": self.t_us / 1e6, "kind": self.kind, "device": self.device, **self.data}
@@ -90,10 +115,15 @@ class Event:
     def json(self) -> str:
         """``as_dict()`` as compact JSON (as Starlette's ``send_json`` writes it), made
         once however many subscribers send it."""
-        text = self._text
-        if not text:
-            text.append(event_json(self.t_us, self.kind, self.device, self.data))
-        return text[0]
+        text = self._json
+        if text is None:
+            body = self.body
+            if body is None:
+                text = event_json(self.t_us, self.kind, self.device, self.data)
+            else:
+                text = '{"t_s":' + repr(self.t_us / 1e6) + "," + body
+            self._json = text
+        return text
 
 
 MAX_STREAMS = 4096  # wiretap streams remembered by number (the oldest forgotten)

@@ -86,26 +86,48 @@ def tcp_packet(
     """One Ethernet/IPv4/TCP frame, lengths and checksums computed: the bytes dpkt
     builds (``dpkt_packet``; a test compares them), made with struct at a tenth of
     the cost (the pcap writer builds one per frame)."""
-    macs = CLIENT_MAC + SERVER_MAC if to_server else SERVER_MAC + CLIENT_MAC
     length = 20 + 20 + len(data)
-    ip = _IP.pack(0x45, 0, length, 0, 0, 64, 6, 0, src[0], dst[0])
-    ip = ip[:10] + _checksum(ip).to_bytes(2, "big") + ip[12:]
+    key = (src[0], dst[0], length)
+    ip = _IP_HEADERS.get(key)
+    if ip is None:  # a connection's frames are of a few lengths: their headers kept
+        ip = _IP.pack(0x45, 0, length, 0, 0, 64, 6, 0, src[0], dst[0])
+        ip = _IP.pack(0x45, 0, length, 0, 0, 64, 6, _checksum(ip), src[0], dst[0])
+        if len(_IP_HEADERS) >= 4096:
+            _IP_HEADERS.clear()
+        _IP_HEADERS[key] = ip
     tcp = _TCP.pack(src[1], dst[1], seq, ack, 0x50, flags, WINDOW, 0, 0)
     pseudo = src[0] + dst[0] + _PSEUDO.pack(6, 20 + len(data))
-    tcp_sum = _checksum(pseudo + tcp + data)
-    tcp = tcp[:16] + tcp_sum.to_bytes(2, "big") + tcp[18:]
+    tcp = _TCP.pack(
+        src[1], dst[1], seq, ack, 0x50, flags, WINDOW, _checksum(pseudo + tcp + data), 0
+    )
     # dst MAC, src MAC: from the client to the server, or back
-    ether = macs[6:] + macs[:6] + b"\x08\x00"
-    return ether + ip + tcp + data
+    return (_TO_SERVER if to_server else _TO_CLIENT) + ip + tcp + data
 
 
 _IP = struct.Struct(">BBHHHBBH4s4s")
 _TCP = struct.Struct(">HHIIBBHHH")
 _PSEUDO = struct.Struct(">xBH")
+_IP_HEADERS: dict[tuple[bytes, bytes, int], bytes] = {}  # (source, destination, length)
+_TO_SERVER = SERVER_MAC + CLIENT_MAC + b"\x08\x00"
+_TO_CLIENT = CLIENT_MAC + SERVER_MAC + b"\x08\x00"
 
 
 def _checksum(data: bytes) -> int:
-    """The Internet checksum (RFC 1071) of ``data``."""
+    """The Internet checksum (RFC 1071) of ``data``: the one's complement of the
+    one's complement sum of its 16-bit words.  That sum is the number the bytes
+    write modulo 0xFFFF (2**16 is 1 modulo 0xFFFF), but for the sum's two zeros:
+    0 only when every word is 0, 0xFFFF otherwise (``checksum_reference``)."""
+    if len(data) % 2:
+        data += b"\x00"
+    total = int.from_bytes(data, "big") % 0xFFFF
+    if not total and data.count(0) != len(data):
+        total = 0xFFFF
+    return ~total & 0xFFFF
+
+
+def checksum_reference(data: bytes) -> int:
+    """RFC 1071 word by word, with the carries folded (``_checksum`` is checked
+    against it)."""
     if len(data) % 2:
         data += b"\x00"
     total: int = sum(struct.unpack(f">{len(data) // 2}H", data))
@@ -161,6 +183,7 @@ class PcapWriter:
         self.packets = 0
         self.failed: str | None = None
         self._lines: dict[str, int] = {}  # RTU lines, numbered in order of first traffic
+        self._out: list[tuple[float, bytes]] = []  # packets made, written at the drain's end
         self._sub: Subscription | None = bus.subscribe(
             ("modbus", KIND_CONNECTION), maxlen=QUEUE, notify=self._drain, raw=True
         )
@@ -172,6 +195,7 @@ class PcapWriter:
         try:
             for event in sub.take():
                 self._event(event)
+            self._flush()
         except (OSError, ValueError) as exc:
             self._fail(f"pcap {self.path}: {getattr(exc, 'strerror', None) or exc}")
 
@@ -275,9 +299,15 @@ class PcapWriter:
     ) -> None:
         src, dst = (conn.client, conn.server) if from_client else (conn.server, conn.client)
         seq, ack = seq & 0xFFFFFFFF, ack & 0xFFFFFFFF
-        frame = tcp_packet(src, dst, seq, ack, flags, payload, to_server=from_client)
-        self._pcap.writepkt(frame, ts=ts)
+        self._out.append((ts, tcp_packet(src, dst, seq, ack, flags, payload, from_client)))
         self.packets += 1
+
+    def _flush(self) -> None:
+        """Write the packets made since the last flush (one call per drain)."""
+        out = self._out
+        if out:
+            self._out = []
+            self._pcap.writepkts(out)
 
     def _fail(self, why: str) -> None:
         self.failed = why

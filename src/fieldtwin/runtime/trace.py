@@ -34,8 +34,11 @@ def line(event: Event, wall: str) -> str:
     """``record(event, wall)`` as its JSON line (without the newline), ``wall`` given as
     ``repr(round(wall, 6))``: the same text as json writes (``ensure_ascii``), by
     orjson where it writes the same (fieldtwin.runtime.obsrecords.plain_body)."""
+    known = event.body  # a remembered frame's: never a "t" nor a "wall" in it
+    if known is not None and known.isascii() and "\x7f" not in known:
+        return '{"t":' + repr(round(event.t_us / 1e6, 6)) + ',"wall":' + wall + "," + known
     data = event.data
-    if "t" not in data and "wall" not in data:
+    if known is None and "t" not in data and "wall" not in data:
         body = plain_body(event.kind, event.device, data)
         if body is not None and body.isascii() and b"\x7f" not in body:
             return (

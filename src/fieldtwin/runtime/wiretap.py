@@ -11,8 +11,13 @@ Framing, decoding and building the events happen on the observers' side
 wiretap's own copy of the framing (an MBAP decoder per TCP connection, an RTU
 framer with the core's own timing per RTU stream), so it never changes what the
 core does.  The pump asks ``bus.watched`` first: an unobserved plant pays one
-attribute read per chunk.  The pure decoding helpers (a frame's fields, a TES's
-state and the outcome it gives) are in fieldtwin.runtime.wirecodec, re-exported here.
+attribute read per chunk.  A TCP frame that comes whole in its chunk (the usual case)
+is decoded once per connection and remembered by its bytes after the transaction
+number (and, for a request, the TES states it met; for a reply, its request): the
+next such frame gets the same fields and JSON with its own transaction number and
+bytes (``Stream.fast``; tests/trace/test_wire_memo.py).  The pure decoding helpers
+(a frame's fields, a TES's state and the outcome it gives) are in
+fieldtwin.runtime.wirecodec, re-exported here.
 
 ``CharTap`` publishes the characters of an SCM channel in and out, one event
 per block the line delivered.
@@ -32,7 +37,15 @@ from fieldtwin.modbus.slave import BROADCAST, SlaveSet
 from fieldtwin.modbus.timing import RtuTiming
 from fieldtwin.runtime.chartap import CharTap
 from fieldtwin.runtime.events import EventBus
-from fieldtwin.runtime.obsrecords import OP_EVENT, OP_FORGET, OP_IN, OP_OUT, OP_POLL, OP_REJECTED
+from fieldtwin.runtime.obsrecords import (
+    OP_EVENT,
+    OP_FORGET,
+    OP_IN,
+    OP_OUT,
+    OP_POLL,
+    OP_REJECTED,
+    template,
+)
 from fieldtwin.runtime.wirecodec import (
     ANSWERS,
     BROADCAST_EXECUTED,
@@ -59,10 +72,21 @@ KIND_REGISTER = "register"
 IN, OUT = "in", "out"
 MAX_PENDING = 256  # requests remembered per connection to pair their replies
 MAX_REJECTED = 256  # bytes of one rejected chunk kept in its event (one RTU frame's worth)
+MEMO = 256  # TCP frames remembered per connection (``Stream.fast``), forgotten all at once
+# a remembered frame: (device, fields with a placeholder transaction and hex, the JSON
+# body's head and tail around them or None, a request's (address, count, write))
+Remembered = tuple[str, dict[str, object], tuple[str, str] | None, Any]
 
 
 class Stream:
-    """The tap on one transport (a TCP connection or an RTU line)."""
+    """The tap on one transport (a TCP connection or an RTU line).
+
+    ``fast``: a TCP frame that comes whole in its chunk, the usual case, is published
+    from what the stream remembers of the same frame (its fields but the transaction
+    number and bytes, and its JSON around them: ``_memo``); False: every frame goes
+    through the framing and decoding (the reference, tests/trace/test_wire_memo.py)."""
+
+    fast = True
 
     def __init__(self, tap: Wiretap, conn: str, number: int | None = None) -> None:
         self.tap = tap
@@ -73,6 +97,10 @@ class Stream:
         self._pending: dict[int, tuple[object, object, bytes | None]] = {}
         self.rtu = self._framer is not None
         self._states: tuple[State, ...] | None = None  # what the record being decoded met
+        # (decoding, the bytes after the transaction number, what it met) of a request,
+        # (decoding, unit, function, exception or byte count, its request) of a reply ->
+        # what every such frame gives: a master polls the same requests
+        self._memo: dict[tuple[Any, ...], Remembered] = {}
         self.sid = tap.bus.attach(self, number)  # the number its records name it by
 
     # -- the pump's calls (the simulation's thread): one raw record each -------------
@@ -147,6 +175,23 @@ class Stream:
     # -- Modbus TCP ------------------------------------------------------------------
 
     def _tcp_in(self, data: bytes, now: int) -> None:
+        size = len(data)
+        if (
+            self.fast
+            and 8 <= size <= 260
+            and not self._mbap.partial
+            and (data[4] << 8 | data[5]) == size - 6
+        ):  # one whole frame, nothing held back: as MbapDecoder.feed would cut it
+            decode = self.tap.bus.decoding
+            key = (decode, data[6:], self._states)
+            known = self._memo.get(key)
+            if known is None:
+                known = self._learn_in(key, data)
+            transaction = (data[0] << 8) | data[1]
+            if known[3] is not None:
+                self._pending_put(transaction, known[3])
+            self._known(now, transaction, data, known)
+            return
         try:
             frames = self._mbap.feed(data)
         except ProtocolError as exc:
@@ -170,6 +215,18 @@ class Stream:
 
     def _tcp_out(self, data: bytes, now: int) -> None:
         if len(data) < 8:
+            return
+        if self.fast:
+            transaction = (data[0] << 8) | data[1]
+            decode = self.tap.bus.decoding
+            request = self._pending.pop(transaction, None) if decode else None
+            key = (decode, data[6:9], request)
+            known = self._memo.get(key)
+            if known is None:
+                known = self._learn_out(key, data, request)
+            self._known(now, transaction, data, known)
+            if request is not None and request[2] is not None:
+                self._register(now, data[6], request[2], data[7:])
             return
         transaction, unit, pdu = (data[0] << 8) | data[1], data[6], data[7:]
         fields: dict[str, object] = {"transaction": transaction, "hex": data.hex()}
@@ -224,10 +281,78 @@ class Stream:
     # -- both ------------------------------------------------------------------------
 
     def _remember(self, key: int, unit: int, fields: dict[str, object], pdu: bytes) -> None:
-        if len(self._pending) >= MAX_PENDING:
-            self._pending.pop(next(iter(self._pending)))
         write = pdu if pdu and pdu[0] in WRITE_FUNCTIONS else None
-        self._pending[key] = (fields.get("address"), fields.get("count"), write)
+        self._pending_put(key, (fields.get("address"), fields.get("count"), write))
+
+    def _pending_put(self, key: int, request: tuple[object, object, bytes | None]) -> None:
+        pending = self._pending
+        if len(pending) >= MAX_PENDING:
+            pending.pop(next(iter(pending)))
+        pending[key] = request
+
+    # -- remembered TCP frames (``fast``) --------------------------------------------
+
+    def _known(self, now: int, transaction: int, data: bytes, known: Remembered) -> None:
+        """Publish a frame from what is remembered of it: its fields and JSON but its
+        transaction number and bytes."""
+        device, fields, around, _ = known
+        hexed = data.hex()
+        fields = fields.copy()  # the keys in their order: the placeholders replaced
+        fields["transaction"] = transaction
+        fields["hex"] = hexed
+        body = (
+            None
+            if around is None
+            else around[0] + str(transaction) + ',"hex":"' + hexed + around[1]
+        )
+        self.tap.bus.deliver(now, KIND_MODBUS, device, fields, body)
+
+    def _learn_in(self, key: tuple[Any, ...], data: bytes) -> Remembered:
+        """What every request of these bytes (but the transaction number) gives, by the
+        general decoding (``_tcp_in``'s)."""
+        unit, pdu = data[6], data[7:]
+        fields: dict[str, object] = {"transaction": 0, "hex": ""}
+        request = None
+        if key[0]:
+            fields.update(request_items(pdu))
+            fields["tes"] = self.tap.outcomes(unit, pdu, False, self._states)
+            write = pdu if pdu[0] in WRITE_FUNCTIONS else None
+            request = (fields.get("address"), fields.get("count"), write)
+        return self._learnt(key, unit, IN, fields, request)
+
+    def _learn_out(
+        self, key: tuple[Any, ...], data: bytes, request: tuple[object, object, bytes | None] | None
+    ) -> Remembered:
+        """What every reply of this unit, function and exception to this request gives
+        (``_tcp_out``'s decoding; the reply's fields read only those: ``reply_fields``)."""
+        unit = data[6]
+        fields: dict[str, object] = {"transaction": 0, "hex": ""}
+        if key[0]:
+            fields.update(reply_fields(data[7:]))
+            if request is not None:
+                address, count, _ = request
+                if address is not None:
+                    fields["address"] = address
+                if count is not None:
+                    fields["count"] = count
+            fields["from"] = self.tap.names.get(unit, "server")
+        return self._learnt(key, unit, OUT, fields, None)
+
+    def _learnt(
+        self,
+        key: tuple[Any, ...],
+        unit: int,
+        direction: str,
+        fields: dict[str, object],
+        request: tuple[object, object, bytes | None] | None,
+    ) -> Remembered:
+        device, data = self.tap.frame(direction, unit, self.conn, fields)
+        known = (device, data, template(KIND_MODBUS, device, data, "transaction"), request)
+        memo = self._memo
+        if len(memo) >= MEMO:
+            memo.clear()
+        memo[key] = known
+        return known
 
     def _register(self, now: int, unit: int, request: object, reply: bytes) -> None:
         """A write the TES answered without an exception: a ``register`` event."""
@@ -373,6 +498,13 @@ class Wiretap:
     def publish(
         self, t_us: int, direction: str, slave: int | None, conn: str, fields: dict[str, object]
     ) -> None:
+        device, data = self.frame(direction, slave, conn, fields)
+        self.bus.deliver(t_us, KIND_MODBUS, device, data)
+
+    def frame(
+        self, direction: str, slave: int | None, conn: str, fields: dict[str, object]
+    ) -> tuple[str, dict[str, object]]:
+        """The device and the data of a ``modbus`` event."""
         data: dict[str, object] = {
             "endpoint": self.endpoint,
             "transport": self.transport,
@@ -383,8 +515,7 @@ class Wiretap:
             **fields,
         }
         known = slave is not None and slave in self.names
-        device = f"{self.endpoint} {slave}" if known else self.endpoint
-        self.bus.deliver(t_us, KIND_MODBUS, device, data)
+        return (f"{self.endpoint} {slave}" if known else self.endpoint), data
 
 
 __all__ = [
