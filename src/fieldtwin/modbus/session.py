@@ -21,6 +21,7 @@ from __future__ import annotations
 import struct
 from collections.abc import Iterable
 from functools import cache
+from typing import Protocol
 
 from fieldtwin.errors import ProtocolError
 from fieldtwin.modbus.mbap import (
@@ -38,6 +39,7 @@ from fieldtwin.modbus.model import (
     NoReply,
     ReadWords,
     Request,
+    Result,
     SlaveDevice,
     WriteWord,
     WriteWords,
@@ -57,6 +59,15 @@ _FRAMES_EXECUTED = Counter.FRAMES_EXECUTED
 _EXCEPTION_REPLIES = Counter.EXCEPTION_REPLIES
 _NOT_READY_REPLIES = Counter.NOT_READY_REPLIES
 _GOOD_FRAMES = Counter.GOOD_FRAMES
+
+
+class FusedExchange(Protocol):
+    """A device's request in one call (``fused_exchange``, an optional ability): what
+    ``count(GOOD_FRAMES)``, ``execute``, ``count`` of the reply's counter and
+    ``answer_delay`` do, in that order; the result and the reply's instant, or None
+    when the device stays silent (only the frame counted)."""
+
+    def __call__(self, request: Request, link: Link, now: int, /) -> tuple[Result, int] | None: ...
 
 
 @cache
@@ -84,6 +95,12 @@ class TcpSession:
         if SERVER_UNIT not in self._units and len(self.slaves.devices) == 1:
             self._units[SERVER_UNIT] = self.slaves.devices[0]
         self._requests: dict[bytes, Request | Rejection] = {}
+        # unit id -> the device's fused exchange, for devices that have one (a TES)
+        self._exchanges: dict[int, FusedExchange] = {}
+        for unit, device in self._units.items():
+            exchange = getattr(device, "fused_exchange", None)
+            if exchange is not None:
+                self._exchanges[unit] = exchange
         # the outbox's heap and the decoder's partial frame, read without a call per request
         self._held = self._outbox.heap
         self._partial = self._decoder.partial
@@ -157,6 +174,9 @@ class TcpSession:
         if device is None or protocol != MODBUS_PROTOCOL:
             self._frame(MbapFrame(transaction, unit, data[first:end], protocol), now)
             return end
+        exchange = self._exchanges.get(unit)
+        if exchange is not None:
+            return self._exchanged(exchange, data, first, end, transaction, unit, now)
         link = self.link
         device.count(link, _GOOD_FRAMES, now)
         pdu = data[first:end]
@@ -202,6 +222,62 @@ class TcpSession:
             self._ready.append(Transmission(at, reply))
         else:
             self._outbox.put(at, reply, device)
+        return end
+
+    def _exchanged(
+        self,
+        exchange: FusedExchange,
+        data: bytes,
+        first: int,
+        end: int,
+        transaction: int,
+        unit: int,
+        now: int,
+    ) -> int:
+        """``_fused`` for a device that does a request's bookkeeping in one call (a TES:
+        its frame counted, the request executed, the reply counted, its instant): the
+        request decoded first (nothing a device sees), a rejection the general way."""
+        pdu = data[first:end]
+        request: Request | Rejection | None
+        if end - first == 5 and data[first] in _CACHED_FUNCTIONS:
+            requests = self._requests
+            request = requests.get(pdu)
+            if request is None:
+                request = decode_request(pdu)
+                if len(requests) >= REQUEST_CACHE:
+                    requests.clear()
+                requests[pdu] = request
+        else:
+            request = decode_request(pdu)
+        if isinstance(request, Rejection):
+            device = self._units[unit]
+            device.count(self.link, _GOOD_FRAMES, now)
+            device.count(self.link, _EXCEPTION_REPLIES, now)
+            reply = encode_mbap(transaction, unit, encode_exception(request.function, request.code))
+            at = now + device.answer_delay(self.link)
+        else:
+            done = exchange(request, self.link, now)
+            if done is None:
+                return end
+            result, at = done
+            kind = request.__class__
+            if (
+                kind is ReadWords and result.__class__ is tuple and len(result) == request.count  # type: ignore[union-attr]
+            ):
+                count = len(result)
+                try:
+                    head = (transaction, 0, 3 + 2 * count, unit, data[first], 2 * count)
+                    reply = _read_reply(count).pack(*head, *result)
+                except struct.error:  # not 16-bit words: the general encoder says what
+                    reply = encode_mbap(transaction, unit, encode_response(request, result))
+            elif result is None and (kind is WriteWords or kind is WriteWord):
+                reply = _HEAD.pack(transaction, 0, 6, unit) + data[first : first + 5]  # the echo
+            else:
+                reply = encode_mbap(transaction, unit, encode_response(request, result))
+        if at <= now and not self._held:
+            self._ready.append(Transmission(at, reply))
+        else:
+            self._outbox.put(at, reply, self._units[unit])
         return end
 
     def _frame(self, frame: MbapFrame, now: int) -> None:

@@ -12,11 +12,13 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Callable, Mapping, Sequence
+from operator import attrgetter
+from typing import Any
 
 from fieldtwin.errors import ProtocolError
 from fieldtwin.tes import state
 from fieldtwin.tes.analog import AnalogInputs
-from fieldtwin.tes.digital import DigitalInputs, Wiring
+from fieldtwin.tes.digital import BitWord, DigitalInputs, PairWord, Wiring
 from fieldtwin.tes.kinds import PAIRS, PARAMETERS, Kind
 from fieldtwin.tes.memmap import Register, register_table
 from fieldtwin.tes.models import Family, TesModel
@@ -82,6 +84,62 @@ class RegisterFile:
                 last, value = (name, i), self.di.value32(name, i, now)
             out.append((value if low else value >> 16) & 0xFFFF)
         return tuple(out)
+
+    def plan(self, regs: Sequence[Register]) -> ReadPlan:
+        """Master reads of the consecutive words ``regs`` as one call ``plan(now)``: what
+        ``get_words(regs, now)`` returns, with the same side effects in the same order.
+
+        Built once per span (the register file's owner keeps it): what only the model
+        decides is settled here (which reader answers each word, the words of inputs or
+        channels the model lacks, which read 0), and runs of words that one part answers
+        become one step: the status word, the memorized, filtered and direct bit words
+        (``DigitalInputs.image``: one call, memorized words restored in address order),
+        the halves of 32-bit values (``DigitalInputs.pair_words``), reserved words (a
+        constant).  Any other word is its kind's reader, as ``get`` calls it.
+        """
+        steps: list[_Step] = []
+        inputs = self.model.digital_inputs
+        pairs = self._pairs
+        j, count = 0, len(regs)
+        while j < count:
+            reg = regs[j]
+            kind = reg.kind
+            if kind is _ZERO:
+                steps.append(((0,), None, 0))
+                j += 1
+            elif kind in _BIT_KINDS:
+                bits: list[BitWord] = []
+                while j < count and regs[j].kind in _BIT_KINDS:
+                    r = regs[j]
+                    first = 16 * r.index
+                    bits.append(
+                        (_STATE_OF_KIND[r.kind], first, r.kind is _MEMORIZED)
+                        if first < inputs
+                        else None
+                    )
+                    j += 1
+                spec = tuple(bits)
+                steps.append(((), functools.partial(self.di.image, spec), -1))
+            elif pairs.get(reg.address) is not None:
+                words: list[PairWord] = []
+                while j < count and (slot := pairs.get(regs[j].address)) is not None:
+                    words.append(slot if slot[1] < inputs else None)
+                    j += 1
+                steps.append(((), functools.partial(_pair_words, self.di, tuple(words)), -1))
+            elif kind is _STATUS:
+                steps.append(((), self.status_at, 0))
+                j += 1
+            elif kind is _OUTPUTS:
+                steps.append(((), self.do.mask, 16 * reg.index))
+                j += 1
+            else:
+                steps.append(((), functools.partial(_READER_BY_ID[id(kind)], self, reg), 0))
+                j += 1
+        return _plan_of(_merged(steps))
+
+    def status_at(self, now: int) -> int:
+        """``status_word`` as a read plan's step (``now`` unused)."""
+        return self.status_word()
 
     def status_word(self) -> int:
         word = self.ram.status
@@ -183,6 +241,50 @@ class RegisterFile:
         self.di.sync()  # inputs followed at read time: their edges so far, old filters
         self.ram.words[reg.address] = value
         self._on_parameter_write(reg.kind, now)
+
+
+# a read plan's step: (constant words, or a reader of one word shifted right by
+# ``shift`` and cut to 16 bits, or of several words when ``shift`` is -1)
+_Step = tuple[tuple[int, ...], Callable[[int], Any] | None, int]
+ReadPlan = Callable[[int], tuple[int, ...]]
+
+
+def _pair_words(di: DigitalInputs, spec: tuple[PairWord, ...], now: int) -> tuple[int, ...]:
+    return di.pair_words(spec, now)
+
+
+def _merged(steps: list[_Step]) -> list[_Step]:
+    """Consecutive constant steps as one."""
+    out: list[_Step] = []
+    for step in steps:
+        if step[1] is None and out and out[-1][1] is None:
+            out[-1] = (out[-1][0] + step[0], None, 0)
+        else:
+            out.append(step)
+    return out
+
+
+def _plan_of(steps: list[_Step]) -> ReadPlan:
+    if len(steps) == 1:
+        const, reader, shift = steps[0]
+        if reader is None:
+            return lambda now: const
+        if shift < 0:
+            return reader  # one run of words: its reader is the plan
+    plan = tuple(steps)
+
+    def read(now: int) -> tuple[int, ...]:
+        out: list[int] = []
+        for const, reader, shift in plan:
+            if reader is None:
+                out += const
+            elif shift < 0:
+                out += reader(now)
+            else:
+                out.append((reader(now) >> shift) & 0xFFFF)
+        return tuple(out)
+
+    return read
 
 
 def _splice(mask: int, word: int, value: int) -> int:
@@ -300,3 +402,10 @@ if _missing:  # pragma: no cover - a programming error caught at import
 _READER_BY_ID: dict[int, Reader] = {id(kind): reader for kind, reader in _READERS.items()}
 _WRITER_BY_ID: dict[int, Writer] = {id(kind): writer for kind, writer in _WRITERS.items()}
 _MEMORIZED = Kind.MEMORIZED
+_ZERO, _STATUS, _OUTPUTS = Kind.ZERO, Kind.STATUS, Kind.OUTPUTS
+_STATE_OF_KIND = {
+    Kind.MEMORIZED: attrgetter("memorized"),
+    Kind.FILTERED: attrgetter("filtered"),
+    Kind.DIRECT: attrgetter("direct"),
+}
+_BIT_KINDS = frozenset(_STATE_OF_KIND)

@@ -56,7 +56,11 @@ class DiscreteSource(Protocol):
     def next_change(self, t_us: int) -> int | None: ...
 
 
-Step = Callable[[int], tuple[bool, int | None]]  # t -> (value at t, next change after t)
+Step = Callable[[int], tuple[bool, int | None]]
+# a bit word of a read plan: (the inputs' state getter, first input, memorized), or None
+BitWord = tuple[Callable[["_Input"], bool], int, bool] | None
+# a word of a 32-bit value of a read plan: (kind's name, input, low half), or None
+PairWord = tuple[str, int, bool] | None  # t -> (value at t, next change after t)
 
 
 @dataclass(slots=True)
@@ -342,6 +346,30 @@ class DigitalInputs:
                 inp.memorized = not inp.memorized
                 inp.changes -= 1
 
+    def image(self, spec: tuple[BitWord, ...], now: int = 0) -> tuple[int, ...]:
+        """Several bit words in one call, in order (a read plan's run of words 001h..006h):
+        each ``(state, first input, memorized)`` is what ``bits`` gives for the word of
+        inputs ``first``..``first + 15``, a memorized word restored first as
+        ``restore_memorized`` does (AMB-TES-12); ``None`` a word of inputs the model
+        lacks (0)."""
+        if self._followed:
+            self.sync()
+        inputs = self._inputs
+        out: list[int] = []
+        for word in spec:
+            if word is None:
+                out.append(0)
+                continue
+            state, first, memorized = word
+            chunk = inputs[first : first + 16]
+            if memorized and any(map(_CHANGES, chunk)):
+                for inp in chunk:
+                    if inp.changes > 0:
+                        inp.memorized = not inp.memorized
+                        inp.changes -= 1
+            out.append(sum(compress(_BITS, map(state, chunk))))
+        return tuple(out)
+
     @property
     def changes_pending(self) -> bool:
         if self._followed:
@@ -377,6 +405,34 @@ class DigitalInputs:
             return (self._running_ticks(inp, now) if running else inp.last[state]) & MASK32
         extra = now - inp.since if running else 0
         return ((inp.cumulated[state] + extra) // TICK) & MASK32
+
+    def pair_words(self, spec: tuple[PairWord, ...], now: int) -> tuple[int, ...]:
+        """Several words of 32-bit values in one call, in order (a read plan's run of
+        pair words): each ``(kind, input, low)`` the low or high half of ``value32``,
+        computed once for the two halves of one value; ``None`` a word of an input the
+        model lacks (0, AMB-TES-13)."""
+        if self._followed:
+            self.sync()
+        inputs = self._inputs
+        out: list[int] = []
+        last: tuple[str, int] | None = None
+        value = 0
+        for word in spec:
+            if word is None:
+                out.append(0)
+                continue
+            kind, i, low = word
+            if last != (kind, i):
+                last = (kind, i)
+                inp = inputs[i]
+                if kind == "counter_rise":
+                    value = inp.rise
+                elif kind == "counter_fall":
+                    value = inp.fall
+                else:
+                    value = self.value32(kind, i, now)
+            out.append(value & 0xFFFF if low else (value >> 16) & 0xFFFF)
+        return tuple(out)
 
     def set_value32(self, kind: str, i: int, value: int, now: int) -> None:
         """A master write (§4.1.3 "Modbus master can reset counters")."""
