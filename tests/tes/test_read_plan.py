@@ -31,6 +31,7 @@ from fieldtwin.modbus.session import TcpSession
 from fieldtwin.signals import Edges, PulseTrain
 from fieldtwin.tes import Tes
 from fieldtwin.tes.execute import SlaveAdapter
+from tests.tes import test_tes_lazy_inputs as lazy_inputs
 
 _MODELS = ("32EST", "16EST", "32ET", "32ET-S", "32ST", "8EA", "4SA", "8ESA")
 
@@ -159,6 +160,7 @@ class _Rig:
         sent = [(t.at, t.data) for t in self.session.poll(now)]
         ram = tes.ram
         tes.di.sync()
+        assert tes.di.masks_agree()  # the inputs' bit masks are what they hold
         inputs = [(i.memorized, i.changes, i.filtered, i.direct) for i in tes.di._inputs]
         return (
             sent,
@@ -235,3 +237,29 @@ def test_the_status_and_inputs_read_restores_memorized_changes() -> None:
 
 def test_the_reference_switch_is_a_class_default() -> None:
     assert SlaveAdapter.planned is True
+
+
+@settings(max_examples=120, deadline=None)
+@given(
+    st.sampled_from(("TES 32EST", "TES 32ET-S")),
+    st.lists(st.one_of(lazy_inputs._step, lazy_inputs._wiring), min_size=1, max_size=30),
+)
+def test_the_inputs_bit_masks_are_what_the_inputs_hold(
+    model: str,
+    steps: list[tuple],  # type: ignore[type-arg]
+) -> None:
+    """The masks the plans read (``DigitalInputs.direct_bits``...) against the inputs'
+    own states after each step of the lazy inputs' histories (pulse trains whose whole
+    periods are jumped, edges, filters, master reads and writes, power cycles, wiring),
+    inputs followed at read time and with an event per edge; then after a master read
+    of the memorized words."""
+    for lazy in (True, False):
+        tes = lazy_inputs._tes(model, lazy)
+        for step in steps:
+            if step[0] == "wiring" and not tes.model.safety:
+                continue
+            lazy_inputs._apply(tes, step)
+            tes.di.sync()
+            assert tes.di.masks_agree(), step
+            tes.read(1), tes.read(2)  # memorized words: one change of each input restored
+            assert tes.di.masks_agree(), step

@@ -12,11 +12,10 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Callable, Mapping, Sequence
-from operator import attrgetter
 from typing import Any
 
 from fieldtwin.errors import ProtocolError
-from fieldtwin.tes import state
+from fieldtwin.tes import digital, state
 from fieldtwin.tes.analog import AnalogInputs
 from fieldtwin.tes.digital import BitWord, DigitalInputs, PairWord, Wiring
 from fieldtwin.tes.kinds import PAIRS, PARAMETERS, Kind
@@ -112,11 +111,7 @@ class RegisterFile:
                 while j < count and regs[j].kind in _BIT_KINDS:
                     r = regs[j]
                     first = 16 * r.index
-                    bits.append(
-                        (_STATE_OF_KIND[r.kind], first, r.kind is _MEMORIZED)
-                        if first < inputs
-                        else None
-                    )
+                    bits.append((_STATE_OF_KIND[r.kind], first) if first < inputs else None)
                     j += 1
                 spec = tuple(bits)
                 steps.append(((), functools.partial(self.di.image, spec), -1))
@@ -404,8 +399,8 @@ _WRITER_BY_ID: dict[int, Writer] = {id(kind): writer for kind, writer in _WRITER
 _MEMORIZED = Kind.MEMORIZED
 _ZERO, _STATUS, _OUTPUTS = Kind.ZERO, Kind.STATUS, Kind.OUTPUTS
 _STATE_OF_KIND = {
-    Kind.MEMORIZED: attrgetter("memorized"),
-    Kind.FILTERED: attrgetter("filtered"),
-    Kind.DIRECT: attrgetter("direct"),
+    Kind.MEMORIZED: digital.MEMORIZED,
+    Kind.FILTERED: digital.FILTERED,
+    Kind.DIRECT: digital.DIRECT,
 }
 _BIT_KINDS = frozenset(_STATE_OF_KIND)
