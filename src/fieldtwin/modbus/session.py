@@ -166,7 +166,9 @@ class TcpSession:
     def _fused(self, data: bytes, start: int, now: int) -> int:
         """The frame at ``start`` of ``data`` (whole, its length checked): what ``_frame``
         does, with no frame object and, for word reads and writes, one ``pack``; the
-        offset of the next frame."""
+        offset of the next frame.  A device with a ``fused_exchange`` (a TES) does its
+        bookkeeping in that one call; the request is decoded first (nothing a device
+        sees), a rejection counted as ever."""
         transaction, protocol, length, unit = _HEAD.unpack_from(data, start)
         first: int = start + HEADER
         end: int = first + length - 1
@@ -174,11 +176,7 @@ class TcpSession:
         if device is None or protocol != MODBUS_PROTOCOL:
             self._frame(MbapFrame(transaction, unit, data[first:end], protocol), now)
             return end
-        exchange = self._exchanges.get(unit)
-        if exchange is not None:
-            return self._exchanged(exchange, data, first, end, transaction, unit, now)
         link = self.link
-        device.count(link, _GOOD_FRAMES, now)
         pdu = data[first:end]
         request: Request | Rejection | None
         if end - first == 5 and data[first] in _CACHED_FUNCTIONS:
@@ -191,12 +189,22 @@ class TcpSession:
                 requests[pdu] = request
         else:
             request = decode_request(pdu)
+        exchange = self._exchanges.get(unit)
         if isinstance(request, Rejection):
+            device.count(link, _GOOD_FRAMES, now)
             device.count(link, _EXCEPTION_REPLIES, now)
             pdu = encode_exception(request.function, request.code)
             reply = encode_mbap(transaction, unit, pdu)
+            at = now + device.answer_delay(link)
         else:
-            result = device.execute(request, link, now, False)
+            if exchange is not None:
+                done = exchange(request, link, now)
+                if done is None:
+                    return end
+                result, at = done
+            else:
+                device.count(link, _GOOD_FRAMES, now)
+                result = device.execute(request, link, now, False)
             kind = request.__class__
             if (
                 kind is ReadWords and result.__class__ is tuple and len(result) == request.count  # type: ignore[union-attr]
@@ -216,68 +224,13 @@ class TcpSession:
             else:
                 reply = encode_mbap(transaction, unit, encode_response(request, result))
                 counter = _counter_for(result)
-            device.count(link, counter, now)
-        at = now + device.answer_delay(link)
+            if exchange is None:
+                device.count(link, counter, now)
+                at = now + device.answer_delay(link)
         if at <= now and not self._held:
             self._ready.append(Transmission(at, reply))
         else:
             self._outbox.put(at, reply, device)
-        return end
-
-    def _exchanged(
-        self,
-        exchange: FusedExchange,
-        data: bytes,
-        first: int,
-        end: int,
-        transaction: int,
-        unit: int,
-        now: int,
-    ) -> int:
-        """``_fused`` for a device that does a request's bookkeeping in one call (a TES:
-        its frame counted, the request executed, the reply counted, its instant): the
-        request decoded first (nothing a device sees), a rejection the general way."""
-        pdu = data[first:end]
-        request: Request | Rejection | None
-        if end - first == 5 and data[first] in _CACHED_FUNCTIONS:
-            requests = self._requests
-            request = requests.get(pdu)
-            if request is None:
-                request = decode_request(pdu)
-                if len(requests) >= REQUEST_CACHE:
-                    requests.clear()
-                requests[pdu] = request
-        else:
-            request = decode_request(pdu)
-        if isinstance(request, Rejection):
-            device = self._units[unit]
-            device.count(self.link, _GOOD_FRAMES, now)
-            device.count(self.link, _EXCEPTION_REPLIES, now)
-            reply = encode_mbap(transaction, unit, encode_exception(request.function, request.code))
-            at = now + device.answer_delay(self.link)
-        else:
-            done = exchange(request, self.link, now)
-            if done is None:
-                return end
-            result, at = done
-            kind = request.__class__
-            if (
-                kind is ReadWords and result.__class__ is tuple and len(result) == request.count  # type: ignore[union-attr]
-            ):
-                count = len(result)
-                try:
-                    head = (transaction, 0, 3 + 2 * count, unit, data[first], 2 * count)
-                    reply = _read_reply(count).pack(*head, *result)
-                except struct.error:  # not 16-bit words: the general encoder says what
-                    reply = encode_mbap(transaction, unit, encode_response(request, result))
-            elif result is None and (kind is WriteWords or kind is WriteWord):
-                reply = _HEAD.pack(transaction, 0, 6, unit) + data[first : first + 5]  # the echo
-            else:
-                reply = encode_mbap(transaction, unit, encode_response(request, result))
-        if at <= now and not self._held:
-            self._ready.append(Transmission(at, reply))
-        else:
-            self._outbox.put(at, reply, self._units[unit])
         return end
 
     def _frame(self, frame: MbapFrame, now: int) -> None:

@@ -122,7 +122,7 @@ class RegisterFile:
                     j += 1
                 steps.append(((), functools.partial(_pair_words, self.di, tuple(words)), -1))
             elif kind is _STATUS:
-                steps.append(((), self.status_at, 0))
+                steps.append(((), self._status_reader(), 0))
                 j += 1
             elif kind is _OUTPUTS:
                 steps.append(((), self.do.mask, 16 * reg.index))
@@ -132,9 +132,16 @@ class RegisterFile:
                 j += 1
         return _plan_of(_merged(steps))
 
-    def status_at(self, now: int) -> int:
-        """``status_word`` as a read plan's step (``now`` unused)."""
-        return self.status_word()
+    def _status_reader(self) -> Callable[[int], int]:
+        """``status_word`` as a read plan's step (``now`` unused): what the model has
+        settled at once."""
+        if self.model.is_analog:
+            return lambda now: self.status_word()
+        ram, di = self.ram, self.di
+        if not self.model.digital_inputs:
+            return lambda now: ram.status
+        memorized = state.MEMORIZED
+        return lambda now: ram.status | memorized if di.changes_pending else ram.status
 
     def status_word(self) -> int:
         word = self.ram.status

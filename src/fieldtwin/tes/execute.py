@@ -116,7 +116,10 @@ class SlaveAdapter:
         if not ram.powered or self._faults.no_answer:
             return None
         self._master_request(link, now)
-        result = self._run(request, link, now)
+        if request.__class__ is ReadWords:  # the usual request: no dispatch
+            result = self._read_words(request, link, now)
+        else:
+            result = self._run(request, link, now)
         if self._analog:
             ram.status &= ~(state.POWER_ON | state.FALLBACK)  # end_exchange
         if result.__class__ is tuple or result is None:
