@@ -44,13 +44,21 @@ from fieldtwin.modbus.model import (
     WriteWord,
     WriteWords,
 )
-from fieldtwin.modbus.pdu import Rejection, decode_request, encode_exception, encode_response
+from fieldtwin.modbus.pdu import (
+    MAX_WRITE_WORDS,
+    WRITE_REGISTERS,
+    Rejection,
+    decode_request,
+    encode_exception,
+    encode_response,
+)
 from fieldtwin.modbus.slave import BROADCAST, Outbox, SlaveSet, Transmission, _counter_for
 
 SERVER_UNIT = 0xFF
 GATEWAY_TARGET_FAILED = 0x0B
 
 _HEAD = struct.Struct(">HHHB")  # transaction, protocol, length, unit
+_WRITE_HEAD = struct.Struct(">HHB")  # fc 16: address, quantity, byte count
 # decoded request PDUs kept per session (reads and single writes: 5 bytes each); a
 # master polls a few spans over and over, so the set stays small; bounded all the same
 REQUEST_CACHE = 256
@@ -68,6 +76,12 @@ class FusedExchange(Protocol):
     when the device stays silent (only the frame counted)."""
 
     def __call__(self, request: Request, link: Link, now: int, /) -> tuple[Result, int] | None: ...
+
+
+@cache
+def _words(count: int) -> struct.Struct:
+    """``count`` big-endian words: the values of an fc 16 request."""
+    return struct.Struct(f">{count}H")
 
 
 @cache
@@ -187,6 +201,17 @@ class TcpSession:
                 if len(requests) >= REQUEST_CACHE:
                     requests.clear()
                 requests[pdu] = request
+        elif data[first] == WRITE_REGISTERS and end - first >= 6:
+            # fc 16 as decode_request makes it, when well formed (its values change
+            # from one write to the next: not kept)
+            address, count, size = _WRITE_HEAD.unpack_from(data, first + 1)
+            if 1 <= count <= MAX_WRITE_WORDS and address + count <= 0x10000:
+                if size == 2 * count and end - first == 6 + size:
+                    request = WriteWords(address, _words(count).unpack_from(data, first + 6))
+                else:
+                    request = decode_request(pdu)
+            else:
+                request = decode_request(pdu)
         else:
             request = decode_request(pdu)
         exchange = self._exchanges.get(unit)

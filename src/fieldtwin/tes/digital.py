@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import enum
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from itertools import compress
 from operator import attrgetter
@@ -485,6 +485,28 @@ class DigitalInputs:
                     value = self.value32(kind, i, now)
             out.append(value & 0xFFFF if low else (value >> 16) & 0xFFFF)
         return tuple(out)
+
+    def set_pair_words(
+        self, spec: tuple[PairWord, ...], values: Sequence[int], k: int, now: int
+    ) -> None:
+        """Master writes of whole 32-bit values in one call (a write plan's run): each
+        ``(kind, input, _)`` set to ``values[k]`` (high) and ``values[k + 1]`` (low) as
+        ``set_value32`` does, each next one from the next two values; ``None`` an input
+        the model lacks (its two values ignored)."""
+        if self._followed:
+            self.sync()
+        inputs = self._inputs
+        for word in spec:
+            if word is not None:
+                kind, i, _ = word
+                value = ((values[k] & 0xFFFF) << 16) | (values[k + 1] & 0xFFFF)
+                if kind == "counter_rise":
+                    inputs[i].rise = value
+                elif kind == "counter_fall":
+                    inputs[i].fall = value
+                else:
+                    self.set_value32(kind, i, value, now)
+            k += 2
 
     def set_value32(self, kind: str, i: int, value: int, now: int) -> None:
         """A master write (§4.1.3 "Modbus master can reset counters")."""

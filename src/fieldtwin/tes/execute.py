@@ -33,7 +33,7 @@ from fieldtwin.modbus.model import (
 )
 from fieldtwin.modbus.slave import _counter_for
 from fieldtwin.tes import state
-from fieldtwin.tes.access import ReadPlan, RegisterFile
+from fieldtwin.tes.access import ReadPlan, RegisterFile, WritePlan
 from fieldtwin.tes.digital import TICK
 from fieldtwin.tes.faults import LineFaults
 from fieldtwin.tes.memmap import Register, coherent_from
@@ -49,6 +49,8 @@ SPAN_CACHE = 64  # spans remembered per TES (the map is fixed per model)
 # a word-read span's registers, read plan, and whether it may answer "not ready"
 _Planned = tuple[Sequence[Register], ReadPlan, bool]
 _NO_SPAN: _Planned = ((), lambda now: (), False)
+_WritePlanned = tuple[Sequence[Register], WritePlan, bool]
+_NO_WRITE_SPAN: _WritePlanned = ((), lambda values, now: None, False)
 
 
 def _span_of(
@@ -88,6 +90,7 @@ class SlaveAdapter:
         # first * 128 + count -> (registers, read plan, may answer "not ready") of a
         # word-read span (_NO_SPAN: not a valid one)
         self._plans: dict[int, _Planned] = {}
+        self._write_plans: dict[int, _WritePlanned] = {}  # the same for word writes
         self._analog = self.model.is_analog
 
     # --- SlaveDevice -------------------------------------------------------
@@ -193,6 +196,19 @@ class SlaveAdapter:
         plans[first * 128 + count] = planned
         return planned
 
+    def _write_planned(self, first: int, count: int) -> _WritePlanned:
+        """The write plan of a word-write span (no registers: not a valid span)."""
+        regs = self._span(first, count, 123, writing=True)
+        planned = _NO_WRITE_SPAN
+        if regs is not None:
+            late = regs[-1].address >= self._coherent_from
+            planned = (regs, self.registers.write_plan(regs), late)
+        plans = self._write_plans
+        if len(plans) >= SPAN_CACHE:
+            plans.clear()
+        plans[first * 128 + count] = planned
+        return planned
+
     def _read_words(self, request: ReadWords, link: Link, now: int) -> Result:
         if request.function not in (3, 4):
             return ExceptionCode.ILLEGAL_FUNCTION
@@ -229,6 +245,18 @@ class SlaveAdapter:
         return tuple(bool((words[b >> 4] >> (b & 0xF)) & 1) for b in bits)
 
     def _write_words(self, first: int, values: tuple[int, ...], link: Link, now: int) -> Result:
+        count = len(values)
+        if self.planned and 1 <= count <= 123:
+            planned = self._write_plans.get(first * 128 + count)
+            if planned is None:
+                planned = self._write_planned(first, count)
+            span, plan, late = planned
+            if not span:
+                return BAD_ADDRESS
+            if late and self._busy(span, link, now):
+                return NOT_READY
+            plan(values, now)
+            return None
         regs = self._span(first, len(values), 123, writing=True)
         if regs is None:
             return BAD_ADDRESS
