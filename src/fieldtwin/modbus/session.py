@@ -13,7 +13,9 @@ every poll of the same span), and the replies to word reads and word writes are
 packed header and all with one ``struct`` call.  The same bytes as the general
 path (``fused = False``), the same device calls in the same order, the same
 counters: ``tests/modbus/test_fused_path.py`` runs both over random requests,
-valid and not, exceptions and odd chunks included.
+valid and not, exceptions and odd chunks included.  A device with a
+``fused_exchange`` (a TES) is asked once per request instead of four times
+(``tests/tes/test_read_plan.py``), and a well-formed fc 16 request is decoded in place.
 """
 
 from __future__ import annotations

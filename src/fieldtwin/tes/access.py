@@ -6,6 +6,8 @@ memorized changes, §4.1.2), ``put`` a master write of a checked writable word.
 It reads and writes the TES's RAM (:class:`fieldtwin.tes.state.Ram`) and its
 I/O components, all given to ``__init__``.  Every :class:`Kind` has a reader
 and every writable kind a writer, in two tables checked complete at import.
+``plan`` and ``write_plan`` make a span's reads or writes one call (issue 25 item
+2): what ``get_words`` and ``put_words`` do, settled once per span.
 """
 
 from __future__ import annotations
