@@ -12,7 +12,8 @@ output command, the watchdog, the link counters, the 32-bit counters and
 chronometers, read-only words), contacts and signals on the inputs (followed at read
 time), analog levels, wiring faults on a TES 32ET-S, time, "slave not ready" (every
 request, the next N, a window of each 100 ms), late answers, a deaf TES, power
-cycles.  After every step both sent the same bytes at the same instants and hold
+cycles; through the TCP link and through a gateway to the RS-232 port.  After every step
+both sent the same bytes at the same instants and hold
 the same words, counters, status, memorized inputs and pending changes, LEDs and
 clock events.
 """
@@ -98,12 +99,13 @@ _step = st.one_of(
 class _Rig:
     """A TES behind a TCP session: the fused paths, or the reference."""
 
-    def __init__(self, model: str, fast: bool) -> None:
+    def __init__(self, model: str, fast: bool, link: Link = Link.TCP) -> None:
         self.clock = SimClock()
-        self.tes = Tes(model, 1, clock=self.clock)
+        port = Link.RS232 if link is Link.RS232 else Link.RS485
+        self.tes = Tes(model, 1, clock=self.clock, link=port)
         if not fast:
             self.tes.slave_adapter.planned = False
-        self.session = TcpSession([self.tes], Link.TCP)
+        self.session = TcpSession([self.tes], link)
         self.session.fused = fast
         self.transaction = 0
 
@@ -176,8 +178,8 @@ class _Rig:
         )
 
 
-def _lives(model: str, steps: list[tuple[str, object]]) -> list[object]:
-    rigs = [_Rig(model, fast) for fast in (True, False)]
+def _lives(model: str, steps: list[tuple[str, object]], link: Link = Link.TCP) -> list[object]:
+    rigs = [_Rig(model, fast, link) for fast in (True, False)]
     seen: list[list[object]] = [[], []]
     for op, arg in steps:
         for rig, out in zip(rigs, seen, strict=True):
@@ -188,8 +190,12 @@ def _lives(model: str, steps: list[tuple[str, object]]) -> list[object]:
 
 
 @settings(max_examples=250, deadline=None)
-@given(st.sampled_from(_MODELS), st.lists(_step, min_size=1, max_size=30))
-@example("32EST", [("set", (3, True)), ("advance", 100_000), ("read", (3, 0, 10))])
+@given(
+    st.sampled_from(_MODELS),
+    st.lists(_step, min_size=1, max_size=30),
+    st.sampled_from((Link.TCP, Link.TCP, Link.RS232)),  # RS-232: a gateway to that port
+)
+@example("32EST", [("set", (3, True)), ("advance", 100_000), ("read", (3, 0, 10))], Link.TCP)
 @example(
     "32ET",
     [
@@ -201,12 +207,13 @@ def _lives(model: str, steps: list[tuple[str, object]]) -> list[object]:
         ("read", (3, 2, 1)),
         ("read", (3, 0, 10)),
     ],
+    Link.TCP,
 )
-@example("32EST", [("fault", "window"), ("read", (3, 0x20, 10)), ("advance", 30_000)])
+@example("32EST", [("fault", "window"), ("read", (3, 0x20, 10)), ("advance", 30_000)], Link.TCP)
 def test_planned_reads_answer_what_the_reference_does(
-    model: str, steps: list[tuple[str, object]]
+    model: str, steps: list[tuple[str, object]], link: Link
 ) -> None:
-    _lives(model, steps)
+    _lives(model, steps, link)
 
 
 def test_the_status_and_inputs_read_restores_memorized_changes() -> None:
