@@ -13,7 +13,9 @@ every poll of the same span), and the replies to word reads and word writes are
 packed header and all with one ``struct`` call.  The same bytes as the general
 path (``fused = False``), the same device calls in the same order, the same
 counters: ``tests/modbus/test_fused_path.py`` runs both over random requests,
-valid and not, exceptions and odd chunks included.
+valid and not, exceptions and odd chunks included.  A device with a
+``fused_exchange`` (a TES) is asked once per request instead of four times
+(``tests/tes/test_read_plan.py``), and a well-formed fc 16 request is decoded in place.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from __future__ import annotations
 import struct
 from collections.abc import Iterable
 from functools import cache
+from typing import Protocol
 
 from fieldtwin.errors import ProtocolError
 from fieldtwin.modbus.mbap import (
@@ -38,17 +41,26 @@ from fieldtwin.modbus.model import (
     NoReply,
     ReadWords,
     Request,
+    Result,
     SlaveDevice,
     WriteWord,
     WriteWords,
 )
-from fieldtwin.modbus.pdu import Rejection, decode_request, encode_exception, encode_response
+from fieldtwin.modbus.pdu import (
+    MAX_WRITE_WORDS,
+    WRITE_REGISTERS,
+    Rejection,
+    decode_request,
+    encode_exception,
+    encode_response,
+)
 from fieldtwin.modbus.slave import BROADCAST, Outbox, SlaveSet, Transmission, _counter_for
 
 SERVER_UNIT = 0xFF
 GATEWAY_TARGET_FAILED = 0x0B
 
 _HEAD = struct.Struct(">HHHB")  # transaction, protocol, length, unit
+_WRITE_HEAD = struct.Struct(">HHB")  # fc 16: address, quantity, byte count
 # decoded request PDUs kept per session (reads and single writes: 5 bytes each); a
 # master polls a few spans over and over, so the set stays small; bounded all the same
 REQUEST_CACHE = 256
@@ -57,6 +69,21 @@ _FRAMES_EXECUTED = Counter.FRAMES_EXECUTED
 _EXCEPTION_REPLIES = Counter.EXCEPTION_REPLIES
 _NOT_READY_REPLIES = Counter.NOT_READY_REPLIES
 _GOOD_FRAMES = Counter.GOOD_FRAMES
+
+
+class FusedExchange(Protocol):
+    """A device's request in one call (``fused_exchange``, an optional ability): what
+    ``count(GOOD_FRAMES)``, ``execute``, ``count`` of the reply's counter and
+    ``answer_delay`` do, in that order; the result and the reply's instant, or None
+    when the device stays silent (only the frame counted)."""
+
+    def __call__(self, request: Request, link: Link, now: int, /) -> tuple[Result, int] | None: ...
+
+
+@cache
+def _words(count: int) -> struct.Struct:
+    """``count`` big-endian words: the values of an fc 16 request."""
+    return struct.Struct(f">{count}H")
 
 
 @cache
@@ -84,6 +111,12 @@ class TcpSession:
         if SERVER_UNIT not in self._units and len(self.slaves.devices) == 1:
             self._units[SERVER_UNIT] = self.slaves.devices[0]
         self._requests: dict[bytes, Request | Rejection] = {}
+        # unit id -> the device's fused exchange, for devices that have one (a TES)
+        self._exchanges: dict[int, FusedExchange] = {}
+        for unit, device in self._units.items():
+            exchange = getattr(device, "fused_exchange", None)
+            if exchange is not None:
+                self._exchanges[unit] = exchange
         # the outbox's heap and the decoder's partial frame, read without a call per request
         self._held = self._outbox.heap
         self._partial = self._decoder.partial
@@ -149,7 +182,9 @@ class TcpSession:
     def _fused(self, data: bytes, start: int, now: int) -> int:
         """The frame at ``start`` of ``data`` (whole, its length checked): what ``_frame``
         does, with no frame object and, for word reads and writes, one ``pack``; the
-        offset of the next frame."""
+        offset of the next frame.  A device with a ``fused_exchange`` (a TES) does its
+        bookkeeping in that one call; the request is decoded first (nothing a device
+        sees), a rejection counted as ever."""
         transaction, protocol, length, unit = _HEAD.unpack_from(data, start)
         first: int = start + HEADER
         end: int = first + length - 1
@@ -158,7 +193,6 @@ class TcpSession:
             self._frame(MbapFrame(transaction, unit, data[first:end], protocol), now)
             return end
         link = self.link
-        device.count(link, _GOOD_FRAMES, now)
         pdu = data[first:end]
         request: Request | Rejection | None
         if end - first == 5 and data[first] in _CACHED_FUNCTIONS:
@@ -169,14 +203,35 @@ class TcpSession:
                 if len(requests) >= REQUEST_CACHE:
                     requests.clear()
                 requests[pdu] = request
+        elif data[first] == WRITE_REGISTERS and end - first >= 6:
+            # fc 16 as decode_request makes it, when well formed (its values change
+            # from one write to the next: not kept)
+            address, count, size = _WRITE_HEAD.unpack_from(data, first + 1)
+            if 1 <= count <= MAX_WRITE_WORDS and address + count <= 0x10000:
+                if size == 2 * count and end - first == 6 + size:
+                    request = WriteWords(address, _words(count).unpack_from(data, first + 6))
+                else:
+                    request = decode_request(pdu)
+            else:
+                request = decode_request(pdu)
         else:
             request = decode_request(pdu)
+        exchange = self._exchanges.get(unit)
         if isinstance(request, Rejection):
+            device.count(link, _GOOD_FRAMES, now)
             device.count(link, _EXCEPTION_REPLIES, now)
             pdu = encode_exception(request.function, request.code)
             reply = encode_mbap(transaction, unit, pdu)
+            at = now + device.answer_delay(link)
         else:
-            result = device.execute(request, link, now, False)
+            if exchange is not None:
+                done = exchange(request, link, now)
+                if done is None:
+                    return end
+                result, at = done
+            else:
+                device.count(link, _GOOD_FRAMES, now)
+                result = device.execute(request, link, now, False)
             kind = request.__class__
             if (
                 kind is ReadWords and result.__class__ is tuple and len(result) == request.count  # type: ignore[union-attr]
@@ -196,8 +251,9 @@ class TcpSession:
             else:
                 reply = encode_mbap(transaction, unit, encode_response(request, result))
                 counter = _counter_for(result)
-            device.count(link, counter, now)
-        at = now + device.answer_delay(link)
+            if exchange is None:
+                device.count(link, counter, now)
+                at = now + device.answer_delay(link)
         if at <= now and not self._held:
             self._ready.append(Transmission(at, reply))
         else:

@@ -6,17 +6,20 @@ memorized changes, §4.1.2), ``put`` a master write of a checked writable word.
 It reads and writes the TES's RAM (:class:`fieldtwin.tes.state.Ram`) and its
 I/O components, all given to ``__init__``.  Every :class:`Kind` has a reader
 and every writable kind a writer, in two tables checked complete at import.
+``plan`` and ``write_plan`` make a span's reads or writes one call (issue 25 item
+2): what ``get_words`` and ``put_words`` do, settled once per span.
 """
 
 from __future__ import annotations
 
 import functools
 from collections.abc import Callable, Mapping, Sequence
+from typing import Any
 
 from fieldtwin.errors import ProtocolError
-from fieldtwin.tes import state
+from fieldtwin.tes import digital, state
 from fieldtwin.tes.analog import AnalogInputs
-from fieldtwin.tes.digital import DigitalInputs, Wiring
+from fieldtwin.tes.digital import BitWord, DigitalInputs, PairWord, Wiring
 from fieldtwin.tes.kinds import PAIRS, PARAMETERS, Kind
 from fieldtwin.tes.memmap import Register, register_table
 from fieldtwin.tes.models import Family, TesModel
@@ -82,6 +85,65 @@ class RegisterFile:
                 last, value = (name, i), self.di.value32(name, i, now)
             out.append((value if low else value >> 16) & 0xFFFF)
         return tuple(out)
+
+    def plan(self, regs: Sequence[Register]) -> ReadPlan:
+        """Master reads of the consecutive words ``regs`` as one call ``plan(now)``: what
+        ``get_words(regs, now)`` returns, with the same side effects in the same order.
+
+        Built once per span (the register file's owner keeps it): what only the model
+        decides is settled here (which reader answers each word, the words of inputs or
+        channels the model lacks, which read 0), and runs of words that one part answers
+        become one step: the status word, the memorized, filtered and direct bit words
+        (``DigitalInputs.image``: one call, memorized words restored in address order),
+        the halves of 32-bit values (``DigitalInputs.pair_words``), reserved words (a
+        constant).  Any other word is its kind's reader, as ``get`` calls it.
+        """
+        steps: list[_Step] = []
+        inputs = self.model.digital_inputs
+        pairs = self._pairs
+        j, count = 0, len(regs)
+        while j < count:
+            reg = regs[j]
+            kind = reg.kind
+            if kind is _ZERO:
+                steps.append(((0,), None, 0))
+                j += 1
+            elif kind in _BIT_KINDS:
+                bits: list[BitWord] = []
+                while j < count and regs[j].kind in _BIT_KINDS:
+                    r = regs[j]
+                    first = 16 * r.index
+                    bits.append((_STATE_OF_KIND[r.kind], first) if first < inputs else None)
+                    j += 1
+                spec = tuple(bits)
+                steps.append(((), functools.partial(self.di.image, spec), -1))
+            elif pairs.get(reg.address) is not None:
+                words: list[PairWord] = []
+                while j < count and (slot := pairs.get(regs[j].address)) is not None:
+                    words.append(slot if slot[1] < inputs else None)
+                    j += 1
+                steps.append(((), functools.partial(_pair_words, self.di, tuple(words)), -1))
+            elif kind is _STATUS:
+                steps.append(((), self._status_reader(), 0))
+                j += 1
+            elif kind is _OUTPUTS:
+                steps.append(((), self.do.mask, 16 * reg.index))
+                j += 1
+            else:
+                steps.append(((), functools.partial(_READER_BY_ID[id(kind)], self, reg), 0))
+                j += 1
+        return _plan_of(_merged(steps))
+
+    def _status_reader(self) -> Callable[[int], int]:
+        """``status_word`` as a read plan's step (``now`` unused): what the model has
+        settled at once."""
+        if self.model.is_analog:
+            return lambda now: self.status_word()
+        ram, di = self.ram, self.di
+        if not self.model.digital_inputs:
+            return lambda now: ram.status
+        memorized = state.MEMORIZED
+        return lambda now: ram.status | memorized if di.changes_pending else ram.status
 
     def status_word(self) -> int:
         word = self.ram.status
@@ -162,6 +224,41 @@ class RegisterFile:
             self.put(reg, values[j], now)
             j += 1
 
+    def write_plan(self, regs: Sequence[Register]) -> WritePlan:
+        """Master writes of the consecutive checked writable words ``regs`` as one call
+        ``plan(values, now)``: what ``put_words(regs, [v & 0xFFFF for v in values], now)``
+        does, in the same order; each run of whole 32-bit values one step
+        (``DigitalInputs.set_pair_words``), settled once per span."""
+        steps: list[tuple[tuple[PairWord, ...], Register | None]] = []
+        inputs = self.model.digital_inputs
+        count, j = len(regs), 0
+        while j < count:
+            if j + 1 < count and _starts_pair(regs, j):
+                run: list[PairWord] = []
+                while j + 1 < count and _starts_pair(regs, j):
+                    reg = regs[j]
+                    i = reg.index >> 1  # AMB-TES-13: inputs the model lacks ignore writes
+                    run.append((_PAIR_NAME_BY_ID[id(reg.kind)], i, False) if i < inputs else None)
+                    j += 2
+                steps.append((tuple(run), None))
+            else:
+                steps.append(((), regs[j]))
+                j += 1
+        plan = tuple(steps)
+        di, put = self.di, self.put
+
+        def write(values: Sequence[int], now: int) -> None:
+            k = 0
+            for run, reg in plan:
+                if reg is None:
+                    di.set_pair_words(run, values, k, now)
+                    k += 2 * len(run)
+                else:
+                    put(reg, values[k] & 0xFFFF, now)
+                    k += 1
+
+        return write
+
     def put_command(self, i: int, value: int) -> None:
         do = self.do
         if self.model.is_analog:
@@ -183,6 +280,64 @@ class RegisterFile:
         self.di.sync()  # inputs followed at read time: their edges so far, old filters
         self.ram.words[reg.address] = value
         self._on_parameter_write(reg.kind, now)
+
+
+# a read plan's step: (constant words, or a reader of one word shifted right by
+# ``shift`` and cut to 16 bits, or of several words when ``shift`` is -1)
+_Step = tuple[tuple[int, ...], Callable[[int], Any] | None, int]
+ReadPlan = Callable[[int], tuple[int, ...]]
+
+
+WritePlan = Callable[[Sequence[int], int], None]
+
+
+def _starts_pair(regs: Sequence[Register], j: int) -> bool:
+    """``regs[j]`` and ``regs[j + 1]`` are the two words of one 32-bit value."""
+    reg, after = regs[j], regs[j + 1]
+    return (
+        id(reg.kind) in _PAIR_NAME_BY_ID
+        and not reg.index & 1
+        and after.kind is reg.kind
+        and after.index == reg.index + 1
+    )
+
+
+def _pair_words(di: DigitalInputs, spec: tuple[PairWord, ...], now: int) -> tuple[int, ...]:
+    return di.pair_words(spec, now)
+
+
+def _merged(steps: list[_Step]) -> list[_Step]:
+    """Consecutive constant steps as one."""
+    out: list[_Step] = []
+    for step in steps:
+        if step[1] is None and out and out[-1][1] is None:
+            out[-1] = (out[-1][0] + step[0], None, 0)
+        else:
+            out.append(step)
+    return out
+
+
+def _plan_of(steps: list[_Step]) -> ReadPlan:
+    if len(steps) == 1:
+        const, reader, shift = steps[0]
+        if reader is None:
+            return lambda now: const
+        if shift < 0:
+            return reader  # one run of words: its reader is the plan
+    plan = tuple(steps)
+
+    def read(now: int) -> tuple[int, ...]:
+        out: list[int] = []
+        for const, reader, shift in plan:
+            if reader is None:
+                out += const
+            elif shift < 0:
+                out += reader(now)
+            else:
+                out.append((reader(now) >> shift) & 0xFFFF)
+        return tuple(out)
+
+    return read
 
 
 def _splice(mask: int, word: int, value: int) -> int:
@@ -300,3 +455,10 @@ if _missing:  # pragma: no cover - a programming error caught at import
 _READER_BY_ID: dict[int, Reader] = {id(kind): reader for kind, reader in _READERS.items()}
 _WRITER_BY_ID: dict[int, Writer] = {id(kind): writer for kind, writer in _WRITERS.items()}
 _MEMORIZED = Kind.MEMORIZED
+_ZERO, _STATUS, _OUTPUTS = Kind.ZERO, Kind.STATUS, Kind.OUTPUTS
+_STATE_OF_KIND = {
+    Kind.MEMORIZED: digital.MEMORIZED,
+    Kind.FILTERED: digital.FILTERED,
+    Kind.DIRECT: digital.DIRECT,
+}
+_BIT_KINDS = frozenset(_STATE_OF_KIND)

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import enum
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from itertools import compress
 from operator import attrgetter
@@ -32,10 +32,11 @@ from fieldtwin.signals.base import SteppedSignal
 from fieldtwin.signals.discrete import PulseTrain
 
 TICK = 100 * MS  # §4.1.4 / §6.2.5 chronometers in 1/10 s
-# an input's state by name, for the map's bit words (one C call per input)
-_STATE_OF = {name: attrgetter(name) for name in ("direct", "filtered", "memorized")}
-_CHANGES = attrgetter("changes")
-_BITS = tuple(1 << i for i in range(16))  # the bit of each input in its word
+# an input's states, for making its bit masks again (one C call per input)
+_DIRECT, _FILTERED = attrgetter("direct"), attrgetter("filtered")
+_MEMORIZED, _CHANGES = attrgetter("memorized"), attrgetter("changes")
+_BIT32 = tuple(1 << i for i in range(32))  # the bit of each input in its mask
+MEMORIZED, FILTERED, DIRECT = 0, 1, 2  # the states of a read plan's bit words
 FILTER_BASE = 5 * MS  # §4.1.1 steps of 5 ms
 MASK32 = 0xFFFFFFFF
 
@@ -56,7 +57,11 @@ class DiscreteSource(Protocol):
     def next_change(self, t_us: int) -> int | None: ...
 
 
-Step = Callable[[int], tuple[bool, int | None]]  # t -> (value at t, next change after t)
+Step = Callable[[int], tuple[bool, int | None]]
+# a bit word of a read plan: (MEMORIZED, FILTERED or DIRECT, first input), or None
+BitWord = tuple[int, int] | None
+# a word of a 32-bit value of a read plan: (kind's name, input, low half), or None
+PairWord = tuple[str, int, bool] | None  # t -> (value at t, next change after t)
 
 
 @dataclass(slots=True)
@@ -109,6 +114,12 @@ class DigitalInputs:
         self._followed: list[int] = []  # inputs that follow a signal at read time
         self._synced = -1  # the instant the followed inputs were caught up to
         self._drivers: dict[int, Handle] = {}  # lazy = False: each input's next edge
+        # the inputs' states as bit masks (bit i: input i), kept with the inputs: a word of
+        # the map is a shift (``bits``); ``changed``: inputs whose memorized changes wait
+        self.direct_bits = 0
+        self.filtered_bits = 0
+        self.memorized_bits = 0
+        self.changed_bits = 0
 
     # --- power -------------------------------------------------------------
 
@@ -119,6 +130,26 @@ class DigitalInputs:
             inp = _Input(contact=old.contact, wiring=old.wiring, since=now, follow=old.follow)
             inp.direct = inp.filtered = inp.memorized = self._electrical(inp)
             self._inputs[j] = inp
+        self._remask()
+
+    def _remask(self) -> None:
+        """The bit masks made again from the inputs."""
+        masks = self._masks_of_inputs()
+        self.direct_bits, self.filtered_bits, self.memorized_bits, self.changed_bits = masks
+
+    def _masks_of_inputs(self) -> tuple[int, int, int, int]:
+        inputs = self._inputs
+        return (
+            sum(compress(_BIT32, map(_DIRECT, inputs))),
+            sum(compress(_BIT32, map(_FILTERED, inputs))),
+            sum(compress(_BIT32, map(_MEMORIZED, inputs))),
+            sum(compress(_BIT32, map(_CHANGES, inputs))),
+        )
+
+    def masks_agree(self) -> bool:
+        """The bit masks are what the inputs hold (the tests' check; no side effect)."""
+        masks = (self.direct_bits, self.filtered_bits, self.memorized_bits, self.changed_bits)
+        return masks == self._masks_of_inputs()
 
     def power_off(self) -> None:
         self.sync()
@@ -226,7 +257,7 @@ class DigitalInputs:
                 value = inp.pending_value
                 self._confirm(i, value, p)
                 if value and fol.pulse is not None:
-                    self._jump(inp, fol, fol.pulse, inp.pending_edge, p, now)
+                    self._jump(i, inp, fol, fol.pulse, inp.pending_edge, p, now)
                 continue
             if e is None or e > now:
                 break
@@ -235,12 +266,19 @@ class DigitalInputs:
             inp.contact = bool(value)
             self._update(i, e)
             if inp.filtered and inp.since == e and fol.pulse is not None:  # no filter
-                self._jump(inp, fol, fol.pulse, e, e, now)
+                self._jump(i, inp, fol, fol.pulse, e, e, now)
         if fol.next_edge is None and inp.pending_at is None:
             self._release(i, inp)  # nothing will change any more
 
     def _jump(
-        self, inp: _Input, fol: _Follow, pulse: PulseTrain, rise: int, confirmed: int, now: int
+        self,
+        i: int,
+        inp: _Input,
+        fol: _Follow,
+        pulse: PulseTrain,
+        rise: int,
+        confirmed: int,
+        now: int,
     ) -> None:
         """Just after the rise at ``rise`` was confirmed: skip the whole periods before now.
 
@@ -262,6 +300,7 @@ class DigitalInputs:
         inp.rise = (inp.rise + k) & MASK32
         inp.fall = (inp.fall + k) & MASK32
         inp.changes += 2 * k
+        self.changed_bits |= 1 << i
         inp.cumulated[1] += k * on
         inp.cumulated[0] += k * off
         inp.last[1], inp.last[0] = on // TICK, off // TICK
@@ -286,6 +325,7 @@ class DigitalInputs:
         if value == inp.direct:
             return
         inp.direct = value
+        self.direct_bits = self.direct_bits | 1 << i if value else self.direct_bits & ~(1 << i)
         if inp.pending is not None:
             inp.pending.cancel()
             inp.pending = None
@@ -309,11 +349,14 @@ class DigitalInputs:
         inp.cumulated[old] += now - inp.since
         inp.since, inp.bias = now, 0
         inp.filtered = value
+        bit = 1 << i
+        self.filtered_bits = self.filtered_bits | bit if value else self.filtered_bits & ~bit
         if value:
             inp.rise = (inp.rise + 1) & MASK32  # §4.1.3
         else:
             inp.fall = (inp.fall + 1) & MASK32
         inp.changes += 1  # §4.1.2
+        self.changed_bits |= bit
         if self.on_change is not None:
             self.on_change(i, value, now)
 
@@ -323,30 +366,67 @@ class DigitalInputs:
         """A 16-bit word of ``direct``, ``filtered`` or ``memorized`` bits."""
         if self._followed:
             self.sync()
-        # the bit of each input that is on, summed in C (a Python loop of 16 per word
-        # was the largest part of a status-and-inputs read)
-        states = map(
-            _STATE_OF.get(attr) or attrgetter(attr), self._inputs[16 * word : 16 * word + 16]
-        )
-        return sum(compress(_BITS, states))
+        if attr == "filtered":
+            return (self.filtered_bits >> 16 * word) & 0xFFFF
+        if attr == "direct":
+            return (self.direct_bits >> 16 * word) & 0xFFFF
+        if attr == "memorized":
+            return (self.memorized_bits >> 16 * word) & 0xFFFF
+        states = map(attrgetter(attr), self._inputs[16 * word : 16 * word + 16])
+        return sum(compress(_BIT32, states))
 
     def restore_memorized(self, word: int) -> None:
         """§4.1.2 a master read: each input of ``word`` with changes toggles once."""
         if self._followed:
             self.sync()
-        inputs = self._inputs[16 * word : 16 * word + 16]
-        if not any(map(_CHANGES, inputs)):
-            return  # the usual case: nothing changed since the last read
-        for inp in inputs:
-            if inp.changes > 0:
-                inp.memorized = not inp.memorized
-                inp.changes -= 1
+        if (self.changed_bits >> 16 * word) & 0xFFFF:  # else nothing changed since
+            self._restore(16 * word)
+
+    def _restore(self, first: int) -> None:
+        """Each of inputs ``first``..``first + 15`` with changes toggles once."""
+        pending = (self.changed_bits >> first) & 0xFFFF
+        inputs = self._inputs
+        toggled = emptied = 0
+        while pending:
+            low = pending & -pending  # the lowest input with changes
+            pending ^= low
+            inp = inputs[first + low.bit_length() - 1]
+            inp.memorized = not inp.memorized
+            inp.changes -= 1
+            toggled |= low
+            if not inp.changes:
+                emptied |= low
+        self.memorized_bits ^= toggled << first
+        self.changed_bits &= ~(emptied << first)
+
+    def image(self, spec: tuple[BitWord, ...], now: int = 0) -> tuple[int, ...]:
+        """Several bit words in one call, in order (a read plan's run of words 001h..006h):
+        each ``(state, first input)`` is what ``bits`` gives for the word of inputs
+        ``first``..``first + 15`` of ``MEMORIZED``, ``FILTERED`` or ``DIRECT``, a memorized
+        word restored first as ``restore_memorized`` does (AMB-TES-12); ``None`` a word
+        of inputs the model lacks (0)."""
+        if self._followed:
+            self.sync()
+        out: list[int] = []
+        for word in spec:
+            if word is None:
+                out.append(0)
+            elif word[0] == MEMORIZED:
+                first = word[1]
+                if (self.changed_bits >> first) & 0xFFFF:
+                    self._restore(first)
+                out.append((self.memorized_bits >> first) & 0xFFFF)
+            elif word[0] == FILTERED:
+                out.append((self.filtered_bits >> word[1]) & 0xFFFF)
+            else:
+                out.append((self.direct_bits >> word[1]) & 0xFFFF)
+        return tuple(out)
 
     @property
     def changes_pending(self) -> bool:
         if self._followed:
             self.sync()
-        return any(map(_CHANGES, self._inputs))
+        return self.changed_bits != 0
 
     def direct(self, i: int) -> bool:
         if self._followed:
@@ -377,6 +457,56 @@ class DigitalInputs:
             return (self._running_ticks(inp, now) if running else inp.last[state]) & MASK32
         extra = now - inp.since if running else 0
         return ((inp.cumulated[state] + extra) // TICK) & MASK32
+
+    def pair_words(self, spec: tuple[PairWord, ...], now: int) -> tuple[int, ...]:
+        """Several words of 32-bit values in one call, in order (a read plan's run of
+        pair words): each ``(kind, input, low)`` the low or high half of ``value32``,
+        computed once for the two halves of one value; ``None`` a word of an input the
+        model lacks (0, AMB-TES-13)."""
+        if self._followed:
+            self.sync()
+        inputs = self._inputs
+        out: list[int] = []
+        last: tuple[str, int] | None = None
+        value = 0
+        for word in spec:
+            if word is None:
+                out.append(0)
+                continue
+            kind, i, low = word
+            if last != (kind, i):
+                last = (kind, i)
+                inp = inputs[i]
+                if kind == "counter_rise":
+                    value = inp.rise
+                elif kind == "counter_fall":
+                    value = inp.fall
+                else:
+                    value = self.value32(kind, i, now)
+            out.append(value & 0xFFFF if low else (value >> 16) & 0xFFFF)
+        return tuple(out)
+
+    def set_pair_words(
+        self, spec: tuple[PairWord, ...], values: Sequence[int], k: int, now: int
+    ) -> None:
+        """Master writes of whole 32-bit values in one call (a write plan's run): each
+        ``(kind, input, _)`` set to ``values[k]`` (high) and ``values[k + 1]`` (low) as
+        ``set_value32`` does, each next one from the next two values; ``None`` an input
+        the model lacks (its two values ignored)."""
+        if self._followed:
+            self.sync()
+        inputs = self._inputs
+        for word in spec:
+            if word is not None:
+                kind, i, _ = word
+                value = ((values[k] & 0xFFFF) << 16) | (values[k + 1] & 0xFFFF)
+                if kind == "counter_rise":
+                    inputs[i].rise = value
+                elif kind == "counter_fall":
+                    inputs[i].fall = value
+                else:
+                    self.set_value32(kind, i, value, now)
+            k += 2
 
     def set_value32(self, kind: str, i: int, value: int, now: int) -> None:
         """A master write (§4.1.3 "Modbus master can reset counters")."""

@@ -16,8 +16,10 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 
+from fieldtwin.clock import MS
 from fieldtwin.modbus.model import (
     NO_REPLY,
+    Counter,
     ExceptionCode,
     Link,
     ReadBits,
@@ -29,16 +31,26 @@ from fieldtwin.modbus.model import (
     WriteWord,
     WriteWords,
 )
+from fieldtwin.modbus.slave import _counter_for
 from fieldtwin.tes import state
-from fieldtwin.tes.access import RegisterFile
+from fieldtwin.tes.access import ReadPlan, RegisterFile, WritePlan
 from fieldtwin.tes.digital import TICK
 from fieldtwin.tes.faults import LineFaults
 from fieldtwin.tes.memmap import Register, coherent_from
 
 NOT_READY = ExceptionCode.SLAVE_DEVICE_FAILURE  # code 4, "slave not ready"
+_RS232 = Link.RS232
+# the counters' slots (state.COUNTER_ORDER) a fused exchange bumps itself
+_GOOD = state.COUNTER_ORDER.index(Counter.GOOD_FRAMES)
+_EXECUTED = state.COUNTER_ORDER.index(Counter.FRAMES_EXECUTED)
 BAD_ADDRESS = ExceptionCode.ILLEGAL_DATA_ADDRESS
 _READS = (ReadBits, ReadWords, ReadExceptionStatus)
 SPAN_CACHE = 64  # spans remembered per TES (the map is fixed per model)
+# a word-read span's registers, read plan, and whether it may answer "not ready"
+_Planned = tuple[Sequence[Register], ReadPlan, bool]
+_NO_SPAN: _Planned = ((), lambda now: (), False)
+_WritePlanned = tuple[Sequence[Register], WritePlan, bool]
+_NO_WRITE_SPAN: _WritePlanned = ((), lambda values, now: None, False)
 
 
 def _span_of(
@@ -51,7 +63,14 @@ def _span_of(
 
 
 class SlaveAdapter:
-    """Executes decoded Modbus requests against one TES's register file."""
+    """Executes decoded Modbus requests against one TES's register file.
+
+    ``planned`` (True): a word read runs the span's read plan (``RegisterFile.plan``,
+    built at the span's first read and kept); False: ``get_words``, word by word (the
+    reference, tests/tes/test_read_plan.py).
+    """
+
+    planned = True
 
     def __init__(
         self,
@@ -68,6 +87,11 @@ class SlaveAdapter:
         self._coherent_from = coherent_from(self.model)
         # (first, count, writing) -> the registers of a valid span, or None
         self._spans: dict[tuple[int, int, bool], tuple[Register, ...] | None] = {}
+        # first * 128 + count -> (registers, read plan, may answer "not ready") of a
+        # word-read span (_NO_SPAN: not a valid one)
+        self._plans: dict[int, _Planned] = {}
+        self._write_plans: dict[int, _WritePlanned] = {}  # the same for word writes
+        self._analog = self.model.is_analog
 
     # --- SlaveDevice -------------------------------------------------------
 
@@ -83,6 +107,33 @@ class SlaveAdapter:
         self.end_exchange()
         return None if broadcast else result
 
+    def exchange(self, request: Request, link: Link, now: int) -> tuple[Result, int] | None:
+        """A request to this TES from a TCP session, bookkeeping and all, in one call:
+        what the session's ``count`` (a good frame), ``execute``, ``count`` (the reply's
+        counter) and ``answer_delay`` do, in that order; the result and the instant the
+        reply leaves, or None when the TES stays silent (nothing counted but the frame)."""
+        ram = self._ram
+        counters = ram.counters["rs232" if link is _RS232 else "rs485"]
+        values = counters.values
+        values[_GOOD] = (values[_GOOD] + 1) & 0xFFFF  # bump(GOOD_FRAMES)
+        if not ram.powered or self._faults.no_answer:
+            return None
+        self._master_request(link, now)
+        if request.__class__ is ReadWords:  # the usual request: no dispatch
+            result = self._read_words(request, link, now)
+        else:
+            result = self._run(request, link, now)
+        if self._analog:
+            ram.status &= ~(state.POWER_ON | state.FALLBACK)  # end_exchange
+        if result.__class__ is tuple or result is None:
+            values[_EXECUTED] = (values[_EXECUTED] + 1) & 0xFFFF  # bump(FRAMES_EXECUTED)
+        else:
+            counters.bump(_counter_for(result))
+        key = state.RS232_DELAY if link is _RS232 else state.RS485_DELAY
+        delay = ram.params[key]
+        assert isinstance(delay, int)
+        return result, now + delay * MS + self._faults.late_us
+
     def begin_exchange(self, link: Link, now: int) -> None:
         self._master_request(link, now)
 
@@ -91,6 +142,8 @@ class SlaveAdapter:
             self._ram.status &= ~(state.POWER_ON | state.FALLBACK)  # §6.4.1 first exchange
 
     def _run(self, request: Request, link: Link, now: int) -> Result:
+        if request.__class__ is ReadWords:  # the usual request first, by its class
+            return self._read_words(request, link, now)
         if isinstance(request, ReadExceptionStatus):
             return self.registers.status_word() & 0xFF  # §7.2.6 the 8 low bits of the status word
         if isinstance(request, ReadWords):
@@ -129,9 +182,46 @@ class SlaveAdapter:
         self._ram.counters[state.link_key(link)].not_ready_owed = True
         return True
 
+    def _planned(self, first: int, count: int) -> _Planned:
+        """The read plan of a word-read span (no registers: not a valid span), built at
+        the span's first read and kept: it depends on nothing but the model."""
+        regs = self._span(first, count, 125, writing=False)
+        planned = _NO_SPAN
+        if regs is not None:
+            late = regs[-1].address >= self._coherent_from
+            planned = (regs, self.registers.plan(regs), late)
+        plans = self._plans
+        if len(plans) >= SPAN_CACHE:
+            plans.clear()  # bounded: a master polls a few spans over and over
+        plans[first * 128 + count] = planned
+        return planned
+
+    def _write_planned(self, first: int, count: int) -> _WritePlanned:
+        """The write plan of a word-write span (no registers: not a valid span)."""
+        regs = self._span(first, count, 123, writing=True)
+        planned = _NO_WRITE_SPAN
+        if regs is not None:
+            late = regs[-1].address >= self._coherent_from
+            planned = (regs, self.registers.write_plan(regs), late)
+        plans = self._write_plans
+        if len(plans) >= SPAN_CACHE:
+            plans.clear()
+        plans[first * 128 + count] = planned
+        return planned
+
     def _read_words(self, request: ReadWords, link: Link, now: int) -> Result:
         if request.function not in (3, 4):
             return ExceptionCode.ILLEGAL_FUNCTION
+        if self.planned and 1 <= request.count <= 125:
+            planned = self._plans.get(request.address * 128 + request.count)
+            if planned is None:
+                planned = self._planned(request.address, request.count)
+            span, plan, late = planned
+            if not span:
+                return BAD_ADDRESS
+            if late and self._busy(span, link, now):
+                return NOT_READY
+            return plan(now)
         regs = self._span(request.address, request.count, 125, writing=False)
         if regs is None:
             return BAD_ADDRESS
@@ -155,6 +245,18 @@ class SlaveAdapter:
         return tuple(bool((words[b >> 4] >> (b & 0xF)) & 1) for b in bits)
 
     def _write_words(self, first: int, values: tuple[int, ...], link: Link, now: int) -> Result:
+        count = len(values)
+        if self.planned and 1 <= count <= 123:
+            planned = self._write_plans.get(first * 128 + count)
+            if planned is None:
+                planned = self._write_planned(first, count)
+            span, plan, late = planned
+            if not span:
+                return BAD_ADDRESS
+            if late and self._busy(span, link, now):
+                return NOT_READY
+            plan(values, now)
+            return None
         regs = self._span(first, len(values), 123, writing=True)
         if regs is None:
             return BAD_ADDRESS

@@ -42,8 +42,10 @@ class MasterWatch:
 
     def master_request(self, link: Link, now: int) -> None:
         """AMB-TES-10: a request to this slave (or broadcast) on RS-485 re-arms the watchdog."""
-        self._ram.wdg_blinking = False
-        if link is not Link.RS232:
+        ram = self._ram
+        ram.wdg_blinking = False
+        # arm(now) with no timer running and no watching time does nothing: not called
+        if link is not Link.RS232 and (self._handle is not None or ram.words.get(self._address)):
             self.arm(now)
 
     def _fall_back(self, now: int) -> None:

@@ -112,6 +112,8 @@ class Tes:
         self.slave_adapter = SlaveAdapter(
             self.registers, ram, self.line_faults, self.watch.master_request
         )
+        # a TCP session's request in one call (TcpSession: the session's fused path)
+        self.fused_exchange = self.slave_adapter.exchange
         # the line-wide counts of the RTU line on each port (issue 15: once per frame)
         self._tallies: dict[str, LineTally] = {}
         self._boot(self._init_eeprom(slave))
@@ -553,6 +555,4 @@ class Tes:
         self.line_faults.queue(kind, count, link)
 
 
-_LINK_KEYS = {link: state.link_key(link) for link in Link}  # once, not per request
-_DELAY_KEYS = {link: f"{key}.answer_delay_ms" for link, key in _LINK_KEYS.items()}
-_RS232_DELAY, _RS485_DELAY = _DELAY_KEYS[Link.RS232], _DELAY_KEYS[Link.RS485]
+_RS232_DELAY, _RS485_DELAY = state.RS232_DELAY, state.RS485_DELAY  # by identity, per request

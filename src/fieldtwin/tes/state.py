@@ -40,6 +40,10 @@ _COUNTER_INDEX = {counter: i for i, counter in enumerate(COUNTER_ORDER)}
 _COUNTER_SLOT = {id(counter): i for counter, i in _COUNTER_INDEX.items()}
 
 
+# the parameter of each port's answer delay (§3.1.3), in ms
+RS232_DELAY, RS485_DELAY = "rs232.answer_delay_ms", "rs485.answer_delay_ms"
+
+
 def link_key(link: Link) -> str:
     """The TES counts RS-232 apart; TCP stands in for the RS-485 bus (see docs/tes.md)."""
     return "rs232" if link is Link.RS232 else "rs485"
