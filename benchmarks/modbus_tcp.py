@@ -24,7 +24,10 @@ request (benchmarks/counts.py: perf or callgrind) from 8 connections: the table
 device's FC03, and the TES 32EST's FC03 of words 0..9 and FC03 and FC16 of words
 37..46; each a fixed workload (``--workload N``: the server, fed by 8 client
 processes of N/8 requests each, which are not counted), at two sizes, so that
-start-up cancels out.  The machine's load does not move these figures.
+start-up cancels out.  Then the same from one connection (the table device's FC03 at
+37, the TES's FC03 of words 0..9), where each request is one cycle of the runner,
+whose inbox is there as in ``fieldtwin run``.  The machine's load does not move these
+figures.
 """
 
 from __future__ import annotations
@@ -60,6 +63,7 @@ from fieldtwin.modbus.model import (
     WriteWords,
 )
 from fieldtwin.modbus.pdu import encode_request
+from fieldtwin.runtime.inbox import Inbox
 from fieldtwin.runtime.modbus_server import serve_tcp
 from fieldtwin.runtime.runner import Runner
 from fieldtwin.transports.tcp import listen
@@ -72,6 +76,8 @@ REPLY_SIZE = 9 + 2 * WORDS
 # then a TES 32EST's status and inputs (words 0..9: what a SCADA polls first), its
 # counters (37..46: read and written)
 COUNTED = (("table", 3, 0), ("tes", 3, 0), ("tes", 3, 37), ("tes", 16, 37))
+# --counts at one connection: each request is one runner cycle (its wait, its inbox)
+COUNTED_ONE = (("table", 3, 37), ("tes", 3, 0))
 # --kit: (first word, functions) of each alternated run of the kit: a TES 32EST's words
 # 0..9 (status, memorized, filtered and direct inputs, outputs), then 37..46
 KIT_CASES = ((0, (3,)), (37, (3, 16)))
@@ -124,8 +130,10 @@ def _client_count(port: int, count: int, fc: int = 3, address: int = 0) -> None:
 def workload(kind: str, requests: int, connections: int = 8, fc: int = 3, address: int = 0) -> None:
     """The counted work: our server answering ``requests`` (``fc`` of 10 words at
     ``address``) from ``connections`` client processes (started with exec, so a
-    counter does not follow them)."""
+    counter does not follow them); the runner takes commands from an inbox, as
+    ``fieldtwin run``'s does (none come)."""
     runner, port = _our_server(kind)
+    runner.take_commands(Inbox())
     each = requests // connections
     command = [sys.executable, __file__, "--client", str(port), str(each), str(fc), str(address)]
     clients = [subprocess.Popen(command) for _ in range(connections)]
@@ -260,22 +268,29 @@ def main() -> None:
     parser.add_argument("--device", default="table", help=argparse.SUPPRESS)
     parser.add_argument("--fc", type=int, default=3, help=argparse.SUPPRESS)
     parser.add_argument("--address", type=int, default=0, help=argparse.SUPPRESS)
+    parser.add_argument("--conns", type=int, default=8, help=argparse.SUPPRESS)
     parser.add_argument("--client", nargs=4, type=int, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.client is not None:
         _client_count(*args.client)
         return
     if args.workload is not None:
-        workload(args.device, args.workload, fc=args.fc, address=args.address)
+        workload(args.device, args.workload, args.conns, fc=args.fc, address=args.address)
         return
     if args.counts:
         from counts import per_unit
 
-        for device, fc, address in COUNTED:
-            extra = ("--device", device, "--fc", str(fc), "--address", str(address))
-            result = per_unit(__file__, 400, 2000, "request", *extra)
-            what = f"FC{fc:02d} x {WORDS} at {address}"
-            print(f"fieldtwin server ({device}), 8 connections, {what}: {result}", flush=True)
+        for conns, cases in ((8, COUNTED), (1, COUNTED_ONE)):
+            for device, fc, address in cases:
+                extra = ("--device", device, "--fc", str(fc), "--address", str(address))
+                extra += ("--conns", str(conns))
+                result = per_unit(__file__, 400, 2000, "request", *extra)
+                what = f"FC{fc:02d} x {WORDS} at {address}"
+                print(
+                    f"fieldtwin server ({device}), {conns} connection{'s' * (conns > 1)},"
+                    f" {what}: {result}",
+                    flush=True,
+                )
         return
     if args.kit is not None:
         raise SystemExit(_kit(Path(args.kit), args.duration, args.reps))
