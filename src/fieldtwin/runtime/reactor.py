@@ -228,13 +228,14 @@ class Reactor:
     def wait_cap(self) -> float:
         """The longest the next wait may be: shorter while a listener backs off, a real
         transport has no descriptor or output is queued for a transport that has none."""
-        if not (self._retrying or self._polled or self._flushers):
-            return MAX_WAIT_S  # the usual case (sockets and ptys alone): nothing to look at
         cap = MAX_WAIT_S
         if self._retrying:
             soonest = min(e.retry_at or 0.0 for e in self._retrying.values())
             cap = min(cap, max(0.0, soonest - self.wall.monotonic()))
-        if any(lk.transport.is_real for lk in self._polled) or self._output_queued():
+        # each list looked at only when it holds something (sockets and ptys alone: none)
+        if (self._polled and any(lk.transport.is_real for lk in self._polled)) or (
+            self._flushers and self._output_queued()
+        ):
             cap = min(cap, POLL_WAIT_S)
         return cap
 

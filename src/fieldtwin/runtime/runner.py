@@ -301,14 +301,13 @@ class Runner:
 
     def _cycle(self, end: int | None, pace: Pace) -> bool:
         """One wait-and-run step; False once the end is reached."""
-        if self._inbox is not None:
-            self._commands()
-            if self._holding():
-                self._hold()
-                return True
+        self._commands()
+        if self._holding():
+            self._hold()
+            return True
         self._reactor.pump()
-        if self._stopping or (self._predicate is not None and self._predicate()):
-            return True  # the loop sees why (done())
+        if self.done():
+            return True  # the loop sees why
         deadline = self.clock.next_deadline()
         busy = deadline is not None and (end is None or deadline <= end)
         if not busy and end is not None and self.clock.now >= end:

@@ -281,8 +281,7 @@ class Stream:
     # -- both ------------------------------------------------------------------------
 
     def _remember(self, key: int, unit: int, fields: dict[str, object], pdu: bytes) -> None:
-        write = pdu if pdu and pdu[0] in WRITE_FUNCTIONS else None
-        self._pending_put(key, (fields.get("address"), fields.get("count"), write))
+        self._pending_put(key, _request_of(fields, pdu))
 
     def _pending_put(self, key: int, request: tuple[object, object, bytes | None]) -> None:
         pending = self._pending
@@ -316,8 +315,7 @@ class Stream:
         if key[0]:
             fields.update(request_items(pdu))
             fields["tes"] = self.tap.outcomes(unit, pdu, False, self._states)
-            write = pdu if pdu[0] in WRITE_FUNCTIONS else None
-            request = (fields.get("address"), fields.get("count"), write)
+            request = _request_of(fields, pdu)
         return self._learnt(key, unit, IN, fields, request)
 
     def _learn_out(
@@ -328,14 +326,7 @@ class Stream:
         unit = data[6]
         fields: dict[str, object] = {"transaction": 0, "hex": ""}
         if key[0]:
-            fields.update(reply_fields(data[7:]))
-            if request is not None:
-                address, count, _ = request
-                if address is not None:
-                    fields["address"] = address
-                if count is not None:
-                    fields["count"] = count
-            fields["from"] = self.tap.names.get(unit, "server")
+            fields.update(self._replied(unit, data[7:], request))
         return self._learnt(key, unit, OUT, fields, None)
 
     def _learnt(
@@ -388,8 +379,13 @@ class Stream:
         self.tap.bus.deliver(now, KIND_REGISTER, f"{self.tap.endpoint} {unit}", data)
 
     def _reply(self, key: int, unit: int, pdu: bytes) -> dict[str, object]:
+        return self._replied(unit, pdu, self._pending.pop(key, None))
+
+    def _replied(
+        self, unit: int, pdu: bytes, request: tuple[object, object, bytes | None] | None
+    ) -> dict[str, object]:
+        """A reply's fields: its own, its request's address and count, who answered."""
         fields = reply_fields(pdu)
-        request = self._pending.pop(key, None)
         if request is not None:
             address, count, _ = request
             if address is not None:
@@ -406,6 +402,12 @@ class Stream:
 
 
 _NOTHING: tuple[object, object, bytes | None] = (None, None, None)
+
+
+def _request_of(fields: dict[str, object], pdu: bytes) -> tuple[object, object, bytes | None]:
+    """What a reply's decoding needs of its request: address, count, the PDU of a write."""
+    write = pdu if pdu and pdu[0] in WRITE_FUNCTIONS else None
+    return (fields.get("address"), fields.get("count"), write)
 
 
 class Wiretap:

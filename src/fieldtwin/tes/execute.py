@@ -15,6 +15,7 @@ the wire take the same path.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
+from typing import TypeVar
 
 from fieldtwin.clock import MS
 from fieldtwin.modbus.model import (
@@ -46,11 +47,22 @@ _EXECUTED = state.COUNTER_ORDER.index(Counter.FRAMES_EXECUTED)
 BAD_ADDRESS = ExceptionCode.ILLEGAL_DATA_ADDRESS
 _READS = (ReadBits, ReadWords, ReadExceptionStatus)
 SPAN_CACHE = 64  # spans remembered per TES (the map is fixed per model)
+K = TypeVar("K")
+V = TypeVar("V")
 # a word-read span's registers, read plan, and whether it may answer "not ready"
 _Planned = tuple[Sequence[Register], ReadPlan, bool]
 _NO_SPAN: _Planned = ((), lambda now: (), False)
 _WritePlanned = tuple[Sequence[Register], WritePlan, bool]
 _NO_WRITE_SPAN: _WritePlanned = ((), lambda values, now: None, False)
+
+
+def _kept(cache: dict[K, V], key: K, value: V) -> V:
+    """``value``, kept in ``cache`` under ``key``; the cache emptied first when it holds
+    SPAN_CACHE (bounded: a master polls a few spans over and over)."""
+    if len(cache) >= SPAN_CACHE:
+        cache.clear()
+    cache[key] = value
+    return value
 
 
 def _span_of(
@@ -165,10 +177,7 @@ class SlaveAdapter:
         spans = self._spans
         regs = spans.get(key)
         if regs is None:
-            regs = _span_of(self.registers.table, first, count, writing)
-            if len(spans) >= SPAN_CACHE:
-                spans.clear()  # bounded: a master polls a few spans over and over
-            spans[key] = regs
+            regs = _kept(spans, key, _span_of(self.registers.table, first, count, writing))
         return regs
 
     def _busy(self, regs: Sequence[Register], link: Link, now: int) -> bool:
@@ -190,11 +199,7 @@ class SlaveAdapter:
         if regs is not None:
             late = regs[-1].address >= self._coherent_from
             planned = (regs, self.registers.plan(regs), late)
-        plans = self._plans
-        if len(plans) >= SPAN_CACHE:
-            plans.clear()  # bounded: a master polls a few spans over and over
-        plans[first * 128 + count] = planned
-        return planned
+        return _kept(self._plans, first * 128 + count, planned)
 
     def _write_planned(self, first: int, count: int) -> _WritePlanned:
         """The write plan of a word-write span (no registers: not a valid span)."""
@@ -203,11 +208,7 @@ class SlaveAdapter:
         if regs is not None:
             late = regs[-1].address >= self._coherent_from
             planned = (regs, self.registers.write_plan(regs), late)
-        plans = self._write_plans
-        if len(plans) >= SPAN_CACHE:
-            plans.clear()
-        plans[first * 128 + count] = planned
-        return planned
+        return _kept(self._write_plans, first * 128 + count, planned)
 
     def _read_words(self, request: ReadWords, link: Link, now: int) -> Result:
         if request.function not in (3, 4):
